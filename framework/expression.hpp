@@ -1,0 +1,91 @@
+/// \file expression.hpp
+/// Polynomial expressions (design.md 4.1): parsing to a syntax tree and evaluation in plain,
+/// interval and Bernstein arithmetic, with or without gradients.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "bernstein.hpp"
+#include "box.hpp"
+#include "interval.hpp"
+#include "scalar.hpp"
+
+namespace ndc {
+
+/// A syntax error in an expression, with the 1-based column where it was found.
+class ExpressionError : public std::runtime_error {
+ public:
+  ExpressionError(int column, const std::string& message)
+      : std::runtime_error(message), column_(column) {}
+  /// 1-based column in the expression text.
+  int column() const { return column_; }
+
+ private:
+  int column_;
+};
+
+/// A node of the syntax tree.
+struct ExprNode {
+  enum class Kind { kNumber, kVariable, kAdd, kSub, kMul, kDiv, kPow, kNeg };
+  Kind kind;
+  std::string literal;  ///< kNumber: the decimal text, kept so Mpfr parses it exactly
+  int variable = -1;    ///< kVariable: index into the variable list
+  int exponent = 0;     ///< kPow: the non-negative integer exponent
+  std::unique_ptr<ExprNode> left, right;  ///< operands (kNeg and kPow use left only)
+};
+
+/// A parsed polynomial expression in the variables `x_0..x_{n-1}`.
+///
+/// Grammar: numbers (decimal, scientific), variables, `+ - * /` (division by a constant
+/// only), `^` with a non-negative integer exponent, parentheses, unary minus. Anything else
+/// (function calls, unknown identifiers, non-integer exponents, division by a non-constant)
+/// is an ExpressionError.
+class Expression {
+ public:
+  Expression();
+  Expression(const Expression&);
+  Expression(Expression&&) noexcept;
+  Expression& operator=(const Expression&);
+  Expression& operator=(Expression&&) noexcept;
+  ~Expression();
+
+  /// Parses `text` with the given variable names; throws ExpressionError.
+  static Expression parse(std::string_view text, std::span<const std::string> variables);
+
+  /// Number of variables n.
+  int dim() const { return dim_; }
+  /// The source text.
+  const std::string& text() const { return text_; }
+  const ExprNode& root() const { return *root_; }
+  /// Degree in each variable (an upper bound from the syntax tree: cancellation is ignored).
+  std::vector<int> degrees() const;
+
+  /// Value at a point.
+  template <class S>
+  S evaluate(std::span<const S> x) const;
+  /// Value and gradient at a point (`gradient.size() == dim()`).
+  template <class S>
+  S evaluate(std::span<const S> x, std::span<S> gradient) const;
+  /// Natural interval extension over a box of intervals.
+  template <class S>
+  Interval<S> evaluate(std::span<const Interval<S>> x) const;
+  /// Interval value and interval gradient (for the mean-value form).
+  template <class S>
+  Interval<S> evaluate(std::span<const Interval<S>> x, std::span<Interval<S>> gradient) const;
+  /// The exact Bernstein form on `domain`, built in Bernstein arithmetic (each variable is the
+  /// linear polynomial on its interval; no power-basis conversion).
+  template <class S>
+  Bernstein<S> toBernstein(const Box<S>& domain) const;
+
+ private:
+  int dim_ = 0;
+  std::string text_;
+  std::unique_ptr<ExprNode> root_;
+};
+
+}  // namespace ndc

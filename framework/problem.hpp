@@ -1,0 +1,58 @@
+/// \file problem.hpp
+/// Problem files (design.md 4.1): TOML with variables, a box domain and equations.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "box.hpp"
+#include "expression.hpp"
+
+namespace ndc {
+
+/// Bad input of any kind. `what()` is one line: `FILE:LINE:COL: message` (line and column
+/// when known). The CLI prints it and exits with status 2.
+class InputError : public std::runtime_error {
+ public:
+  explicit InputError(const std::string& line) : std::runtime_error(line) {}
+  /// Formats `file[:line[:column]]: message`; line/column 0 means unknown.
+  static InputError at(const std::string& file, int line, int column, const std::string& message);
+};
+
+/// Optional ground truth of a problem (`[expect]`).
+struct Expectation {
+  std::optional<long> components;
+  std::optional<long> eulerCharacteristic;
+  /// Every other integer key of `[expect]`, by name (e.g. `genus`, `boundary_edges`).
+  std::map<std::string, long> other;
+};
+
+/// A validated problem: `m = n - k` polynomial constraints in n variables on a box.
+struct Problem {
+  std::string path;  ///< the file it came from
+  std::string name;
+  std::string description;
+  std::vector<std::string> variables;
+  Box<double> domain;
+  std::vector<Expression> equations;
+  Expectation expect;
+
+  int n() const { return static_cast<int>(variables.size()); }
+  int m() const { return static_cast<int>(equations.size()); }
+  /// Manifold dimension k = n - m.
+  int k() const { return n() - m(); }
+  /// The domain in scalar S.
+  template <class S>
+  Box<S> domainAs() const;
+};
+
+/// Reads and validates a problem file; throws InputError.
+Problem loadProblem(const std::filesystem::path& file);
+/// Parses and validates problem text (`file` is used in messages); throws InputError.
+Problem parseProblem(const std::string& text, const std::string& file);
+
+}  // namespace ndc

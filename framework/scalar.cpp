@@ -1,0 +1,39 @@
+#include "scalar.hpp"
+
+#include <boost/multiprecision/detail/digits.hpp>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace ndc {
+
+unsigned setMpfrPrecision(unsigned bits) {
+  // Boost keeps the default precision in decimal digits: take the fewest digits whose
+  // binary precision reaches the requested bits.
+  unsigned digits10 = boost::multiprecision::detail::digits2_2_10(bits);
+  while (boost::multiprecision::detail::digits10_2_2(digits10) < bits) ++digits10;
+  Mpfr::default_precision(digits10);
+  return mpfrPrecision();
+}
+
+unsigned mpfrPrecision() {
+  return static_cast<unsigned>(boost::multiprecision::detail::digits10_2_2(Mpfr::default_precision()));
+}
+
+double ScalarTraits<double>::fromString(std::string_view text) {
+  std::string s(text);
+  std::size_t used = 0;
+  double v = std::stod(s, &used);
+  if (used != s.size()) throw std::invalid_argument("not a number: " + s);
+  return v;
+}
+
+Mpfr ScalarTraits<Mpfr>::epsilon() {
+  Mpfr one = 1;
+  return ldexp(one, 1 - static_cast<int>(mpfrPrecision()));
+}
+
+Mpfr ScalarTraits<Mpfr>::fromString(std::string_view text) { return Mpfr(std::string(text)); }
+
+}  // namespace ndc

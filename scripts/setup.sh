@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Installs the Debian packages ndcontour needs, and nothing when they are all present.
+# Usage: scripts/setup.sh [--tex]   (--tex also installs TeX for the `paper` target)
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config
+  libeigen3-dev libboost-dev libmpfr-dev libmpfi-dev libgmp-dev
+  catch2 doxygen gnuplot-nox libtomlplusplus-dev libcli11-dev libbenchmark-dev
+)
+if [[ "${1:-}" == "--tex" ]]; then
+  packages+=(texlive-latex-base texlive-latex-recommended texlive-latex-extra)
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if [[ ${#missing[@]} -eq 0 ]]; then
+  exit 0
+fi
+
+echo "setup: installing ${missing[*]}" >&2
+sudo_cmd=()
+if [[ $(id -u) -ne 0 ]]; then
+  if command -v sudo >/dev/null 2>&1; then
+    sudo_cmd=(sudo)
+  else
+    echo "setup: need root or sudo to install: ${missing[*]}" >&2
+    exit 1
+  fi
+fi
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update -qq
+"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
