@@ -1,0 +1,84 @@
+/// \file strategy.hpp
+/// The five strategy families of the pipeline (design.md 2) as C++20 concepts. Each family
+/// has plain `final` implementations in strategies/<family>/ and one closed std::variant with
+/// a `create...(name)` that rejects unknown names. Strategies are dispatched once per box and
+/// per stage (std::visit outside the loops), never per coefficient.
+#pragma once
+
+#include <concepts>
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "box.hpp"
+#include "complex.hpp"
+#include "grid.hpp"
+#include "problem.hpp"
+#include "system.hpp"
+
+namespace ndc {
+
+/// Bounding: can a box contain a common zero of every F_i? A bounding strategy carries a
+/// per-box `State` down the subdivision (e.g. the Bernstein patches of the box) so that a
+/// child is derived from its parent, not from the root.
+/// Models: BernsteinBounding, IntervalBounding (strategies/bounding/bounding.hpp).
+template <class B>
+concept BoundingStrategy = requires(const B b, typename B::State& st, const typename B::State& cst,
+                                    int axis) {
+  typename B::State;
+  { b.root(st) } -> std::same_as<void>;                  // state of the whole domain
+  { b.halve(cst, axis, st, st) } -> std::same_as<void>;  // children at the axis midpoint
+  { b.mayContainZero(cst) } -> std::same_as<bool>;       // false: discard the box
+};
+
+/// Subdivision: the order of splitting. Every model halves axis `level mod n` at halving
+/// number `level` and ends on the same uniform grid of 2^L cells per axis; they differ in
+/// after which halvings a box is bounded.
+/// Models: UniformSubdivision (2^n children per level, as in the paper), BinarySubdivision.
+template <class D>
+concept SubdivisionStrategy = requires(const D d, int level, int n) {
+  { d.boundsAfter(level, n) } -> std::same_as<bool>;
+};
+
+/// Projection of a point onto M (in place). Models: NewtonProjection.
+template <class S>
+using Projector = std::function<ProjectedPoint<S>(std::span<S> x)>;
+
+/// Classification of one solution cell from its closed box and its projected point.
+/// Models: PaperClassification.
+template <class C, class S>
+concept ClassificationStrategy =
+    requires(const C c, const Box<S>& cell, std::span<const S> point, bool converged) {
+      { c.classify(cell, point, converged) } -> std::same_as<CellClass>;
+    };
+
+/// Everything a connection strategy may use.
+template <class S>
+struct ConnectionInput {
+  const Problem& problem;
+  const System<S>& system;
+  const SolutionCells& cells;
+  const Projections<S>& projections;
+  const std::vector<CellClass>& classes;
+  Projector<S> project;  ///< Newton projection onto M (for centroids, dual vertices)
+  int k = 1;             ///< manifold dimension
+};
+
+/// What a connection strategy returns.
+template <class S>
+struct ConnectionOutput {
+  Complex<S> complex;
+  std::int64_t ambiguousCells = 0;  ///< cells whose piece of M is not one simple piece
+  std::int64_t singularCells = 0;   ///< cells with a rank-deficient Jacobian near M
+};
+
+/// Connection: builds the k-simplices. Models: PaperConnection, NaiveConnection
+/// (strategies/connection/connection.hpp).
+template <class C, class S>
+concept ConnectionStrategy = requires(const C c, const ConnectionInput<S>& in) {
+  { c.connect(in) } -> std::same_as<ConnectionOutput<S>>;
+};
+
+}  // namespace ndc

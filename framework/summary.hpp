@@ -1,0 +1,47 @@
+/// \file summary.hpp
+/// Run settings and the run summary: the `summary.json` contract (design.md 4.3).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace ndc {
+
+/// The strategies and parameters of one run (`settings` in summary.json).
+struct Settings {
+  int depth = 6;
+  std::string bounding = "bernstein";
+  std::string subdivision = "binary";
+  std::string scalar = "double";
+  unsigned precisionBits = 53;
+  std::string projection = "newton";
+  std::string classification = "paper";
+  std::string connection = "paper";
+  std::optional<std::uint64_t> jitter;
+};
+
+/// Mesh statistics after welding identical vertices (`mesh` in summary.json).
+struct MeshStats {
+  std::int64_t vertices = 0, edges = 0, triangles = 0, components = 0;
+  std::int64_t boundaryEdges = 0, nonmanifoldEdges = 0, eulerCharacteristic = 0;
+  std::int64_t openEnds = 0, branchVertices = 0;
+  double maxResidual = 0;    ///< max over vertices and equations of |F_i(v)|
+  double maxChordError = 0;  ///< max distance of segment midpoints / triangle centroids to M
+};
+
+/// Everything summary.json holds.
+struct Summary {
+  std::string problem;
+  int n = 0, k = 0;
+  Settings settings;
+  std::int64_t visited = 0, solution = 0, normal = 0, abnormal = 0, failed = 0;
+  MeshStats mesh;
+  std::int64_t ambiguousCells = 0, singularCells = 0;
+  double tSubdivision = 0, tProjection = 0, tConnection = 0, tAnalysis = 0, tTotal = 0;
+};
+
+/// summary.json text (schema "ndcontour.summary/1"), field names exactly as design.md 4.3.
+std::string toJson(const Summary& summary);
+
+}  // namespace ndc
