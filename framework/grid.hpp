@@ -34,6 +34,20 @@ struct Grid {
   double cellWidth(int axis) const;
 };
 
+/// The closed box of the cell with multi-index `index` in scalar S, on `domain` (the grid's
+/// domain in S): `lo_j + (hi_j - lo_j) i_j / 2^L`.
+template <class S>
+Box<S> cellBox(const Grid& grid, const Box<S>& domain, std::span<const std::int32_t> index) {
+  Box<S> box{std::vector<S>(grid.n), std::vector<S>(grid.n)};
+  const S cells = S(static_cast<double>(grid.cellsPerAxis()));
+  for (int j = 0; j < grid.n; ++j) {
+    const S w = (domain.hi[j] - domain.lo[j]) / cells;
+    box.lo[j] = domain.lo[j] + w * S(static_cast<double>(index[j]));
+    box.hi[j] = index[j] + 1 == grid.cellsPerAxis() ? domain.hi[j] : box.lo[j] + w;
+  }
+  return box;
+}
+
 /// The solution cells: final-depth boxes the subdivision could not discard.
 struct SolutionCells {
   Grid grid;

@@ -20,6 +20,9 @@
 
 namespace ndc {
 
+/// Progress report of a long stage: `fraction` in [0, 1] of `stage` ("subdivision", ...).
+using Progress = std::function<void(const char* stage, double fraction)>;
+
 /// Bounding: can a box contain a common zero of every F_i? A bounding strategy carries a
 /// per-box `State` down the subdivision (e.g. the Bernstein patches of the box) so that a
 /// child is derived from its parent, not from the root.
