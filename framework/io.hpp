@@ -1,0 +1,26 @@
+/// \file io.hpp
+/// Output files of a run (design.md 4.3, 4.4): summary.json, mesh.ply and cells.csv.
+#pragma once
+
+#include <filesystem>
+#include <ostream>
+
+#include "pipeline.hpp"
+
+namespace ndc {
+
+/// Writes the mesh as ASCII PLY: vertices with float64 `x y z` (the first three coordinates,
+/// zero-padded for n = 2) and `u0 .. u{n-1}`; `face` with `vertex_indices` (k = 2) or `edge`
+/// with `vertex1 vertex2` (k = 1).
+void writePly(std::ostream& out, const RunResult& result);
+
+/// Writes cells.csv: cell number, multi-index, centre, class, projected point.
+void writeCellsCsv(std::ostream& out, const RunResult& result);
+
+/// Writes summary.json, mesh.ply and cells.csv into `dir` (created if needed). Each file is
+/// written to a temporary name and renamed into place only when complete, so an existing
+/// output is never replaced by a partial one. Throws ndc::InputError if `dir` cannot be
+/// written.
+void writeOutputs(const std::filesystem::path& dir, const RunResult& result);
+
+}  // namespace ndc

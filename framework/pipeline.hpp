@@ -1,0 +1,41 @@
+/// \file pipeline.hpp
+/// The pipeline of design.md 2 (paper, Algorithm 1): problem -> subdivision with bounding ->
+/// solution cells -> projection -> classification -> connection -> complex -> analysis.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "complex.hpp"
+#include "problem.hpp"
+#include "strategy.hpp"
+#include "summary.hpp"
+
+namespace ndc {
+
+/// Everything a run produces, in double for output (the run itself works in its scalar).
+struct RunResult {
+  Summary summary;
+  int n = 0;
+  int k = 0;
+  /// Welded mesh: n coordinates per vertex, k + 1 vertex numbers per simplex.
+  std::vector<double> vertices;
+  std::vector<std::int32_t> simplices;
+  /// Per solution cell: its multi-index (n ints), centre and projected point (n doubles
+  /// each) and class.
+  std::vector<std::int32_t> cellIndex;
+  std::vector<double> cellCentre;
+  std::vector<double> cellPoint;
+  std::vector<CellClass> cellClass;
+};
+
+/// Runs the whole pipeline on a problem with the given settings. Strategy names are checked
+/// first (ndc::InputError on unknown names or a depth the grid cannot hold); the scalar is
+/// chosen at run time (`settings.scalar`, `settings.precisionBits`). `progress` may be empty.
+RunResult runPipeline(const Problem& problem, const Settings& settings,
+                      const Progress& progress = {});
+
+/// The smallest depth L whose cells are no wider than `tolerance` on every axis.
+int depthForTolerance(const Problem& problem, double tolerance);
+
+}  // namespace ndc
