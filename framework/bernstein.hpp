@@ -53,7 +53,8 @@ class Bernstein {
   S& coefficient(std::span<const int> index);
 
   /// Value at a point `x` of the domain (in domain coordinates), by de Casteljau per axis.
-  /// Points outside the domain are evaluated by extrapolation.
+  /// Points outside the domain are evaluated by extrapolation. Works in a per-thread scratch
+  /// buffer, so it is thread-safe and does not allocate once warm (except the returned value).
   S evaluate(std::span<const S> x) const;
 
   /// Partial derivative with respect to `x_axis` (degree drops by one; a degree-0 variable
@@ -63,6 +64,8 @@ class Bernstein {
   /// de Casteljau split along `axis` at the local parameter `t` in (0, 1): `left` gets the
   /// part on `[lo, lo + t (hi - lo)]`, `right` the rest. `left` and `right` are overwritten
   /// and keep their storage when it is large enough (no allocation in the subdivision loop).
+  /// `left` and `right` must be distinct; either may be `*this` (then a copy is split).
+  /// Throws std::invalid_argument for a bad axis or t outside (0, 1).
   void split(int axis, const S& t, Bernstein& left, Bernstein& right) const;
 
   /// Halves along `axis` into `left` and `right` (split at t = 1/2); allocation-free when
