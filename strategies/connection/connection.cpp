@@ -1,0 +1,18 @@
+// The connection family's factory (design.md 2, 4.2 `--connection`).
+#include "strategies/connection/connection.hpp"
+
+#include <string>
+
+#include "framework/problem.hpp"
+
+namespace ndc {
+
+Connection createConnection(std::string_view name) {
+  if (name == "paper") return PaperConnection{};
+  if (name == "naive") return NaiveConnection{};
+  if (name == "crossing") throw InputError("connection 'crossing' is not available yet");
+  throw InputError("unknown connection '" + std::string(name) +
+                   "' (expected paper, naive or crossing)");
+}
+
+}  // namespace ndc
