@@ -28,6 +28,8 @@ struct MeshStats {
   std::int64_t openEnds = 0, branchVertices = 0;
   double maxResidual = 0;    ///< max over vertices and equations of |F_i(v)|
   double maxChordError = 0;  ///< max distance of segment midpoints / triangle centroids to M
+  /// Midpoints / centroids whose projection did not converge (left out of maxChordError).
+  std::int64_t chordFailures = 0;
 };
 
 /// Everything summary.json holds.

@@ -1,0 +1,301 @@
+#include "strategies/projection/newton.hpp"
+
+#include <boost/multiprecision/eigen.hpp>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "framework/problem.hpp"
+
+namespace ndc {
+
+namespace {
+
+template <class S>
+bool isFinite(const S& v) {
+  using std::isfinite;
+  return isfinite(v);
+}
+
+template <class S>
+S normInf(std::span<const S> x) {
+  using std::abs;
+  S worst = 0;
+  for (const S& v : x) worst = std::max<S>(worst, abs(v));
+  return worst;
+}
+
+/// Value of a constant subtree (the divisor of a kDiv node).
+template <class S>
+S constantValue(const ExprNode& node) {
+  switch (node.kind) {
+    case ExprNode::Kind::kNumber:
+      return ScalarTraits<S>::fromString(node.literal);
+    case ExprNode::Kind::kAdd:
+      return constantValue<S>(*node.left) + constantValue<S>(*node.right);
+    case ExprNode::Kind::kSub:
+      return constantValue<S>(*node.left) - constantValue<S>(*node.right);
+    case ExprNode::Kind::kMul:
+      return constantValue<S>(*node.left) * constantValue<S>(*node.right);
+    case ExprNode::Kind::kDiv:
+      return constantValue<S>(*node.left) / constantValue<S>(*node.right);
+    case ExprNode::Kind::kNeg:
+      return -constantValue<S>(*node.left);
+    case ExprNode::Kind::kPow: {
+      S base = constantValue<S>(*node.left), result = 1;
+      for (int e = 0; e < node.exponent; ++e) result *= base;
+      return result;
+    }
+    case ExprNode::Kind::kVariable:
+      break;
+  }
+  throw std::logic_error("newton: division by a non-constant expression");
+}
+
+}  // namespace
+
+/// Translates a syntax tree into the postfix program of `|F|(|x|)`; returns the total degree
+/// and adds the operation count to `ops`.
+template <class S, class Op>
+static int compileMagnitude(const ExprNode& node, std::vector<Op>& program,
+                            std::vector<S>& constants, int& ops) {
+  using std::abs;
+  using Kind = ExprNode::Kind;
+  switch (node.kind) {
+    case Kind::kNumber:
+      // A decimal literal is rounded once when it is read.
+      ++ops;
+      constants.push_back(abs(ScalarTraits<S>::fromString(node.literal)));
+      program.push_back({Op::Kind::kConstant, static_cast<int>(constants.size()) - 1});
+      return 0;
+    case Kind::kVariable:
+      program.push_back({Op::Kind::kVariable, node.variable});
+      return 1;
+    case Kind::kNeg:
+      // Negation is exact and does not change magnitudes.
+      return compileMagnitude<S>(*node.left, program, constants, ops);
+    case Kind::kAdd:
+    case Kind::kSub: {
+      // |a - b| <= |a| + |b|: the magnitude bound adds both terms.
+      ++ops;
+      const int a = compileMagnitude<S>(*node.left, program, constants, ops);
+      const int b = compileMagnitude<S>(*node.right, program, constants, ops);
+      program.push_back({Op::Kind::kAdd, 0});
+      return std::max(a, b);
+    }
+    case Kind::kMul: {
+      ++ops;
+      const int a = compileMagnitude<S>(*node.left, program, constants, ops);
+      const int b = compileMagnitude<S>(*node.right, program, constants, ops);
+      program.push_back({Op::Kind::kMul, 0});
+      return a + b;
+    }
+    case Kind::kDiv: {
+      // The divisor is constant (grammar): divide by its actual magnitude, not its bound.
+      ops += 2;
+      const int a = compileMagnitude<S>(*node.left, program, constants, ops);
+      constants.push_back(abs(constantValue<S>(*node.right)));
+      program.push_back({Op::Kind::kDiv, static_cast<int>(constants.size()) - 1});
+      return a;
+    }
+    case Kind::kPow: {
+      // A naive product of e factors: e - 1 roundings at most.
+      ops += std::max(node.exponent - 1, 0);
+      const int a = compileMagnitude<S>(*node.left, program, constants, ops);
+      program.push_back({Op::Kind::kPow, node.exponent});
+      return a * node.exponent;
+    }
+  }
+  return 0;
+}
+
+template <class S>
+NewtonProjection<S>::NewtonProjection(const System<S>& system, int maxIterations)
+    : system_(&system), maxIterations_(maxIterations) {
+  for (const Expression& e : system.equations()) {
+    MagnitudeProgram program;
+    int ops = 0;
+    const int degree = compileMagnitude<S>(e.root(), program.ops, constants_, ops);
+    program.count = ops + degree;
+    programs_.push_back(std::move(program));
+  }
+}
+
+template <class S>
+S NewtonProjection<S>::magnitude(const MagnitudeProgram& program, std::span<const S> absX,
+                                 std::vector<S>& stack) const {
+  using Kind = typename MagnitudeOp::Kind;
+  stack.clear();
+  for (const MagnitudeOp& op : program.ops) {
+    switch (op.kind) {
+      case Kind::kConstant:
+        stack.push_back(constants_[op.argument]);
+        break;
+      case Kind::kVariable:
+        stack.push_back(absX[op.argument]);
+        break;
+      case Kind::kAdd: {
+        S b = std::move(stack.back());
+        stack.pop_back();
+        stack.back() += b;
+        break;
+      }
+      case Kind::kMul: {
+        S b = std::move(stack.back());
+        stack.pop_back();
+        stack.back() *= b;
+        break;
+      }
+      case Kind::kDiv:
+        stack.back() /= constants_[op.argument];
+        break;
+      case Kind::kPow: {
+        S base = stack.back(), result = 1;
+        for (int e = 0; e < op.argument; ++e) result *= base;
+        stack.back() = result;
+        break;
+      }
+    }
+  }
+  return stack.back();
+}
+
+template <class S>
+void NewtonProjection<S>::residualTolerance(std::span<const S> x, std::span<S> tol) const {
+  using std::abs;
+  std::vector<S> absX(x.size()), stack;
+  for (std::size_t j = 0; j < x.size(); ++j) absX[j] = abs(x[j]);
+  const S eps = ScalarTraits<S>::epsilon();
+  for (std::size_t i = 0; i < programs_.size(); ++i) {
+    // tol_i = 2 (ops_i + deg_i) eps |F_i|(|x|): see the header.
+    tol[i] = S(2 * programs_[i].count) * eps * magnitude(programs_[i], absX, stack);
+  }
+}
+
+template <class S>
+ProjectedPoint<S> NewtonProjection<S>::project(std::span<S> x) const {
+  using std::abs;
+  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+  using Vector = Eigen::Matrix<S, Eigen::Dynamic, 1>;
+  const int n = system_->n(), m = system_->m();
+  const S eps = ScalarTraits<S>::epsilon();
+  const S divergence = S(1e4) * (1 + normInf<S>(x));
+  std::vector<S> f(m), jacobian(std::size_t(m) * n), tol(m);
+  Matrix jac(m, n);
+  Vector rhs(m);
+  Eigen::CompleteOrthogonalDecomposition<Matrix> cod(m, n);
+  // Relative rank threshold: singular values below 8 n eps of the largest count as zero.
+  cod.setThreshold(S(8 * n) * eps);
+
+  const auto residualConverged = [&](const S& slack) {
+    residualTolerance(x, tol);
+    for (int i = 0; i < m; ++i) {
+      if (!(abs(f[i]) <= slack * tol[i])) return false;
+    }
+    return true;
+  };
+
+  ProjectedPoint<S> result;
+  for (int it = 0;; ++it) {
+    result.iterations = it;
+    system_->evaluate(x, f, jacobian);
+    // Divergence: overflow or NaN ends the iteration.
+    if (!std::all_of(f.begin(), f.end(), isFinite<S>)) return result;
+    // Converged when no equation can be told from zero at the working precision.
+    if (residualConverged(S(1))) {
+      result.converged = true;
+      return result;
+    }
+    if (it == maxIterations_) return result;
+
+    // Minimum-norm step s = J^+ F(x) from a rank-revealing decomposition of J.
+    for (int i = 0; i < m; ++i) {
+      rhs(i) = f[i];
+      for (int j = 0; j < n; ++j) jac(i, j) = jacobian[std::size_t(i) * n + j];
+    }
+    cod.compute(jac);
+    // A rank-deficient J has no minimum-norm Newton step that zeroes F.
+    if (cod.rank() < m) return result;
+    const Vector step = cod.solve(rhs);
+    S stepNorm = 0;
+    for (int j = 0; j < n; ++j) {
+      x[j] -= step(j);
+      stepNorm = std::max<S>(stepNorm, abs(step(j)));
+    }
+    result.iterations = it + 1;
+
+    // Divergence: the iterate ran away from where it started.
+    const S size = normInf<S>(x);
+    if (!isFinite(size) || size > divergence) return result;
+    // Stagnation at the rounding floor: accept within a slack of the residual tolerance.
+    if (stepNorm <= S(16) * eps * (1 + size)) {
+      system_->evaluate(x, f);
+      result.converged = std::all_of(f.begin(), f.end(), isFinite<S>) && residualConverged(S(64));
+      return result;
+    }
+  }
+}
+
+template class NewtonProjection<double>;
+template class NewtonProjection<Mpfr>;
+
+template <class S>
+Projection<S> createProjection(std::string_view name, const System<S>& system) {
+  if (name == "newton") return NewtonProjection<S>(system);
+  std::string known;
+  for (std::string_view k : kProjectionNames) known += (known.empty() ? "" : ", ") + std::string(k);
+  throw InputError("unknown projection '" + std::string(name) + "' (known: " + known + ")");
+}
+
+template <class S>
+Projections<S> projectCells(const Projection<S>& projection, const SolutionCells& cells,
+                            const Box<S>& domain, const Progress& progress) {
+  const int n = cells.grid.n;
+  const std::size_t count = cells.size();
+  Projections<S> out;
+  out.n = n;
+  out.point.resize(count * n);
+  out.converged.resize(count);
+  out.iterations.resize(count);
+  const std::size_t every = std::max<std::size_t>(1, count / 100);
+  // One dispatch for the whole stage, not one per cell.
+  std::visit(
+      [&](const auto& strategy) {
+        for (std::size_t c = 0; c < count; ++c) {
+          // Alg. 1: start from the centroid of the cell's closed box.
+          const Box<S> box = cellBox<S>(cells.grid, domain, cells.cell(c));
+          std::span<S> x(out.point.data() + c * n, static_cast<std::size_t>(n));
+          for (int j = 0; j < n; ++j) x[j] = (box.lo[j] + box.hi[j]) / 2;
+          const ProjectedPoint<S> r = strategy.project(x);
+          out.converged[c] = r.converged ? 1 : 0;
+          out.iterations[c] = r.iterations;
+          if (progress && (c + 1) % every == 0) {
+            progress("projection", static_cast<double>(c + 1) / static_cast<double>(count));
+          }
+        }
+      },
+      projection);
+  if (progress) progress("projection", 1.0);
+  return out;
+}
+
+template <class S>
+Projector<S> makeProjector(const Projection<S>& projection) {
+  return [projection](std::span<S> x) {
+    return std::visit([&](const auto& strategy) { return strategy.project(x); }, projection);
+  };
+}
+
+template Projection<double> createProjection(std::string_view, const System<double>&);
+template Projection<Mpfr> createProjection(std::string_view, const System<Mpfr>&);
+template Projections<double> projectCells(const Projection<double>&, const SolutionCells&,
+                                          const Box<double>&, const Progress&);
+template Projections<Mpfr> projectCells(const Projection<Mpfr>&, const SolutionCells&,
+                                        const Box<Mpfr>&, const Progress&);
+template Projector<double> makeProjector(const Projection<double>&);
+template Projector<Mpfr> makeProjector(const Projection<Mpfr>&);
+
+}  // namespace ndc

@@ -1,0 +1,125 @@
+/// \file newton.hpp
+/// The projection family (design.md 2): the paper's Newton-Raphson projection of a cell's
+/// point onto the solution manifold M (Sec. 4, Algorithm 1: "apply the Newton-Raphson method
+/// to project the solution point in c into the solution manifold").
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "framework/box.hpp"
+#include "framework/complex.hpp"
+#include "framework/grid.hpp"
+#include "framework/scalar.hpp"
+#include "framework/strategy.hpp"
+#include "framework/system.hpp"
+
+namespace ndc {
+
+/// Minimum-norm Newton-Raphson onto M = {F = 0}:
+/// `x <- x - J^+ F(x)`, where `J^+ = J^T (J J^T)^{-1}` is the pseudo-inverse of the m x n
+/// Jacobian (full row rank). The step is computed with a complete orthogonal decomposition of
+/// J (rank revealing, and it never forms J J^T, so the conditioning is not squared). A
+/// rank-deficient J at an iterate whose residual has not yet converged ends the iteration as
+/// not converged.
+///
+/// **Convergence criterion** (backward error at the working precision). For each equation
+/// `F_i`, let `|F_i|(|x|)` be its syntax tree evaluated with every constant and variable
+/// replaced by its absolute value and every subtraction by an addition: it bounds the sum of
+/// the magnitudes of all the terms the evaluation of `F_i(x)` combines. A standard
+/// running-error argument gives `|fl(F_i(x)) - F_i(x)| <= ops_i * eps * |F_i|(|x|)` to first
+/// order, and rounding x itself to the working precision moves `F_i` by at most
+/// `deg_i * eps * |F_i|(|x|)` (Euler's identity for polynomials with non-negative
+/// coefficients), where `ops_i` is the operation count of the tree and `deg_i` its total
+/// degree. So no iterate can be told apart from a zero once
+///
+///     |F_i(x)| <= tol_i(x) = 2 (ops_i + deg_i) eps |F_i|(|x|)   for every i,
+///
+/// with `eps = ScalarTraits<S>::epsilon()`; that is the test, applied before each step (so a
+/// point already on M stays put with 0 iterations). For O(1) coefficients and |x| = O(1) this
+/// is ~1e-14 in double and ~1e-36 in MPFR at 128 bits. Newton also stops when a step is below
+/// `16 eps (1 + |x|_inf)` (stagnation at the rounding floor); it then counts as converged iff
+/// every `|F_i| <= 64 tol_i` (a tolerance for the first-order bound above being optimistic).
+///
+/// **Divergence**: a non-finite F or iterate, or `|x|_inf > 1e4 (1 + |x_0|_inf)`, stops the
+/// iteration at once as not converged. After `maxIterations` steps without convergence the
+/// point is reported as not converged (e.g. a Newton cycle, or no real zero nearby).
+template <class S>
+class NewtonProjection final {
+ public:
+  /// The system must outlive the projection (it is held by pointer so the object is cheap to
+  /// copy into a Projector).
+  explicit NewtonProjection(const System<S>& system, int maxIterations = 40);
+
+  /// Projects `x` onto M in place (Alg. 1, projection step). `converged` says whether the
+  /// final x satisfies the criterion above; `iterations` is the number of Newton steps taken.
+  ProjectedPoint<S> project(std::span<S> x) const;
+
+  /// `tol_i(x)` of the convergence criterion for every equation (m values into `tol`).
+  void residualTolerance(std::span<const S> x, std::span<S> tol) const;
+
+  const System<S>& system() const { return *system_; }
+  int maxIterations() const { return maxIterations_; }
+
+ private:
+  /// One instruction of the postfix program that evaluates `|F_i|(|x|)`.
+  struct MagnitudeOp {
+    enum class Kind : std::uint8_t { kConstant, kVariable, kAdd, kMul, kDiv, kPow };
+    Kind kind;
+    int argument = 0;  ///< kConstant: index into constants_; kVariable: variable; kPow: exponent
+  };
+  struct MagnitudeProgram {
+    std::vector<MagnitudeOp> ops;
+    int count = 0;  ///< ops_i + deg_i
+  };
+  S magnitude(const MagnitudeProgram& program, std::span<const S> absX,
+              std::vector<S>& stack) const;
+
+  const System<S>* system_;
+  int maxIterations_;
+  std::vector<S> constants_;  ///< |literal| of every number of every equation
+  std::vector<MagnitudeProgram> programs_;
+};
+
+extern template class NewtonProjection<double>;
+extern template class NewtonProjection<Mpfr>;
+
+/// The projection family: one closed variant, dispatched once per stage.
+/// Models: NewtonProjection.
+template <class S>
+using Projection = std::variant<NewtonProjection<S>>;
+
+/// The names `createProjection` accepts (the CLI's `projection` setting).
+inline constexpr std::array<std::string_view, 1> kProjectionNames{"newton"};
+
+/// Makes the projection called `name` for `system`; throws InputError on an unknown name.
+template <class S>
+Projection<S> createProjection(std::string_view name, const System<S>& system);
+
+/// Alg. 1, projection step for every solution cell: projects the centroid of each cell's
+/// closed box (cellBox on `domain`, the grid's domain in S) onto M. Reports progress as
+/// ("projection", fraction) when `progress` is set.
+template <class S>
+Projections<S> projectCells(const Projection<S>& projection, const SolutionCells& cells,
+                            const Box<S>& domain, const Progress& progress);
+
+/// Wraps a projection as the Projector the connection and analysis stages call (copies the
+/// projection; the system it refers to must outlive the Projector).
+template <class S>
+Projector<S> makeProjector(const Projection<S>& projection);
+
+extern template Projection<double> createProjection(std::string_view, const System<double>&);
+extern template Projection<Mpfr> createProjection(std::string_view, const System<Mpfr>&);
+extern template Projections<double> projectCells(const Projection<double>&, const SolutionCells&,
+                                                 const Box<double>&, const Progress&);
+extern template Projections<Mpfr> projectCells(const Projection<Mpfr>&, const SolutionCells&,
+                                               const Box<Mpfr>&, const Progress&);
+extern template Projector<double> makeProjector(const Projection<double>&);
+extern template Projector<Mpfr> makeProjector(const Projection<Mpfr>&);
+
+}  // namespace ndc

@@ -1,0 +1,394 @@
+// Tests of the projection (minimum-norm Newton) and classification families.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "framework/problem.hpp"
+#include "framework/system.hpp"
+#include "strategies/classification/classification.hpp"
+#include "strategies/projection/newton.hpp"
+#include "test_support.hpp"
+
+namespace {
+
+using ndc::toDouble;
+
+/// A problem in variables x0..x{n-1} on [-lo, lo]^n.
+ndc::Problem makeProblem(int n, const std::vector<std::string>& equations, double half = 3) {
+  std::string text = "name = \"test\"\nvariables = [";
+  for (int j = 0; j < n; ++j) text += (j ? ", \"x" : "\"x") + std::to_string(j) + "\"";
+  text += "]\ndomain = [";
+  for (int j = 0; j < n; ++j) {
+    text += (j ? ", [" : "[") + std::to_string(-half) + ", " + std::to_string(half) + "]";
+  }
+  text += "]\nequations = [";
+  for (std::size_t i = 0; i < equations.size(); ++i) {
+    text += (i ? ", \"" : "\"") + equations[i] + "\"";
+  }
+  text += "]\n";
+  return ndc::parseProblem(text, "test");
+}
+
+/// Residual the tests demand at converged points: 1e-10 in double, 1e-30 in MPFR at 128 bits.
+template <class S>
+double residualLimit() {
+  return std::is_same_v<S, double> ? 1e-10 : 1e-30;
+}
+
+/// Agreement with a closed-form answer.
+template <class S>
+double tight() {
+  return std::is_same_v<S, double> ? 1e-12 : 1e-30;
+}
+
+template <class S>
+S norm(std::span<const S> x) {
+  using std::sqrt;
+  S s = 0;
+  for (const S& v : x) s += v * v;
+  return sqrt(s);
+}
+
+template <class S>
+S distance(std::span<const S> a, std::span<const S> b) {
+  using std::sqrt;
+  S s = 0;
+  for (std::size_t j = 0; j < a.size(); ++j) s += (a[j] - b[j]) * (a[j] - b[j]);
+  return sqrt(s);
+}
+
+/// A random direction scaled to length `r` (from double draws).
+template <class S>
+std::vector<S> randomPoint(std::mt19937& rng, int n, double r) {
+  std::normal_distribution<double> g;
+  std::vector<S> x(n);
+  for (auto& v : x) v = S(g(rng));
+  const S len = norm<S>(x);
+  for (auto& v : x) v = v / len * S(r);
+  return x;
+}
+
+}  // namespace
+
+TEMPLATE_TEST_CASE("Newton projects onto the circle and sphere radially", "[projection]",
+                   NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  using std::abs;
+  using std::sqrt;
+  for (int n : {2, 3}) {
+    INFO("n = " << n);
+    const ndc::Problem problem =
+        makeProblem(n, {n == 2 ? "x0^2 + x1^2 - 1" : "x0^2 + x1^2 + x2^2 - 1"});
+    const ndc::System<S> system(problem);
+    const ndc::NewtonProjection<S> newton(system);
+    std::mt19937 rng(7 + n);
+    std::uniform_real_distribution<double> radius(0.3, 2.5);
+    for (int trial = 0; trial < 40; ++trial) {
+      std::vector<S> x = randomPoint<S>(rng, n, radius(rng));
+      // Minimum-norm steps follow the gradient, which is radial: the nearest point x / |x|.
+      std::vector<S> nearest = x;
+      const S len = norm<S>(x);
+      for (auto& v : nearest) v /= len;
+      const auto r = newton.project(x);
+      REQUIRE(r.converged);
+      CHECK(r.iterations > 0);
+      CHECK(r.iterations < 15);
+      CHECK(toDouble(system.maxResidual(x)) <= residualLimit<S>());
+      CHECK(toDouble(distance<S>(x, nearest)) <= tight<S>());
+      // A point that is already on M stays where it is.
+      const std::vector<S> before = x;
+      const auto again = newton.project(x);
+      CHECK(again.converged);
+      CHECK(again.iterations == 0);
+      CHECK(x == before);
+    }
+  }
+}
+
+TEMPLATE_TEST_CASE("Newton from (2, 0) lands on the nearest point (1, 0)", "[projection]",
+                   NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  using std::abs;
+  using std::sqrt;
+  const ndc::Problem problem = makeProblem(2, {"x0^2 + x1^2 - 1"});
+  const ndc::System<S> system(problem);
+  const ndc::NewtonProjection<S> newton(system);
+  std::vector<S> x{S(2), S(0)};
+  const auto r = newton.project(x);
+  REQUIRE(r.converged);
+  CHECK(toDouble(abs(x[0] - S(1))) <= tight<S>());
+  CHECK(toDouble(abs(x[1])) <= tight<S>());
+
+  // A point given on M (to the working precision of its decimal literals) is not moved.
+  std::vector<S> onCircle{ndc::ScalarTraits<S>::fromString("0.6"),
+                          ndc::ScalarTraits<S>::fromString("0.8")};
+  const std::vector<S> before = onCircle;
+  const auto stay = newton.project(onCircle);
+  CHECK(stay.converged);
+  CHECK(stay.iterations == 0);
+  CHECK(onCircle == before);
+}
+
+TEMPLATE_TEST_CASE("Newton converges onto a torus in R^3", "[projection]", NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  using std::abs;
+  using std::sqrt;
+  // Ring torus with R = 1, r = 0.4 (R^2 - r^2 = 0.84).
+  const ndc::Problem problem = makeProblem(3, {"(x0^2 + x1^2 + x2^2 + 0.84)^2 - 4*(x0^2 + x1^2)"});
+  const ndc::System<S> system(problem);
+  const ndc::NewtonProjection<S> newton(system);
+  const auto torusDistance = [](std::span<const S> p) {
+    const S rho = sqrt(p[0] * p[0] + p[1] * p[1]) - 1;
+    return sqrt(rho * rho + p[2] * p[2]) - ndc::ScalarTraits<S>::fromString("0.4");
+  };
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> angle(0, 2 * M_PI), offset(-0.05, 0.05);
+  for (int trial = 0; trial < 40; ++trial) {
+    const double u = angle(rng), v = angle(rng);
+    std::vector<S> x{S((1 + 0.4 * std::cos(v)) * std::cos(u) + offset(rng)),
+                     S((1 + 0.4 * std::cos(v)) * std::sin(u) + offset(rng)),
+                     S(0.4 * std::sin(v) + offset(rng))};
+    const std::vector<S> start = x;
+    const S startDistance = abs(torusDistance(start));
+    const auto r = newton.project(x);
+    REQUIRE(r.converged);
+    CHECK(toDouble(system.maxResidual(x)) <= residualLimit<S>());
+    CHECK(toDouble(abs(torusDistance(x))) <= tight<S>());
+    // Minimum norm: the point found is nearly the nearest one (second order in the offset).
+    CHECK(toDouble(distance<S>(x, start)) <= 1.05 * toDouble(startDistance) + tight<S>());
+  }
+}
+
+TEMPLATE_TEST_CASE("Newton converges onto the Clifford torus in R^4", "[projection]", NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  using std::abs;
+  using std::sqrt;
+  const ndc::Problem problem = makeProblem(4, {"x0^2 + x1^2 - 0.5", "x2^2 + x3^2 - 0.5"});
+  const ndc::System<S> system(problem);
+  const ndc::NewtonProjection<S> newton(system);
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> coordinate(-1.2, 1.2);
+  const S half = sqrt(S(ndc::ScalarTraits<S>::fromString("0.5")));
+  for (int trial = 0; trial < 40; ++trial) {
+    std::vector<S> x(4);
+    for (auto& v : x) v = S(coordinate(rng));
+    // The equations decouple: the nearest point is radial in the (x0, x1) and (x2, x3) planes.
+    std::vector<S> nearest = x;
+    for (int plane : {0, 2}) {
+      const S len = sqrt(x[plane] * x[plane] + x[plane + 1] * x[plane + 1]);
+      nearest[plane] = x[plane] / len * half;
+      nearest[plane + 1] = x[plane + 1] / len * half;
+    }
+    const auto r = newton.project(x);
+    REQUIRE(r.converged);
+    CHECK(toDouble(system.maxResidual(x)) <= residualLimit<S>());
+    CHECK(toDouble(distance<S>(x, nearest)) <= tight<S>());
+  }
+}
+
+TEMPLATE_TEST_CASE("Newton converges onto a circle in R^8", "[projection]", NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  using std::abs;
+  using std::sqrt;
+  // The unit sphere of R^8 cut by 6 affine hyperplanes: a circle in a 2-plane near the origin.
+  const ndc::Problem problem = makeProblem(
+      8,
+      {"x0^2 + x1^2 + x2^2 + x3^2 + x4^2 + x5^2 + x6^2 + x7^2 - 1", "x2 - 0.1*x0 + 0.2*x1 - 0.05",
+       "x3 + 0.3*x0 - 0.1*x1 + 0.1", "x4 - 0.2*x0 - 0.2*x1", "x5 + 0.1*x0 + 0.4*x1 - 0.02",
+       "x6 - 0.25*x0 + 0.05*x1 + 0.03", "x7 + 0.15*x0 - 0.3*x1 - 0.07"},
+      2);
+  const ndc::System<S> system(problem);
+  const ndc::NewtonProjection<S> newton(system);
+  std::mt19937 rng(17);
+  for (int trial = 0; trial < 40; ++trial) {
+    std::vector<S> x = randomPoint<S>(rng, 8, 0.5 + 0.1 * (trial % 10));
+    const auto r = newton.project(x);
+    REQUIRE(r.converged);
+    CHECK(r.iterations < 20);
+    CHECK(toDouble(system.maxResidual(x)) <= residualLimit<S>());
+    CHECK(std::abs(toDouble(norm<S>(x)) - 1) <= 1e-12);
+  }
+}
+
+TEMPLATE_TEST_CASE("Newton reports non-convergence", "[projection]", NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  using std::abs;
+  using std::sqrt;
+  SECTION("no real zero: x^2 + y^2 + 1 = 0") {
+    const ndc::Problem problem = makeProblem(2, {"x0^2 + x1^2 + 1"});
+    const ndc::System<S> system(problem);
+    const ndc::NewtonProjection<S> newton(system);
+    std::mt19937 rng(19);
+    std::uniform_real_distribution<double> coordinate(-2, 2);
+    for (int trial = 0; trial < 20; ++trial) {
+      std::vector<S> x{S(coordinate(rng)), S(coordinate(rng))};
+      CHECK_FALSE(newton.project(x).converged);
+    }
+    // A zero Jacobian at the start: rank deficient, no step.
+    std::vector<S> origin{S(0), S(0)};
+    const auto atOrigin = newton.project(origin);
+    CHECK_FALSE(atOrigin.converged);
+    CHECK(atOrigin.iterations == 0);
+    // A nearly flat start throws the iterate far away: divergence stops at once.
+    std::vector<S> flat{S(1e-9), S(0)};
+    const auto diverged = newton.project(flat);
+    CHECK_FALSE(diverged.converged);
+    CHECK(diverged.iterations == 1);
+  }
+  SECTION("a Newton 2-cycle: x^3 - 2x + 2 from x = 0") {
+    const ndc::Problem problem = makeProblem(2, {"x0^3 - 2*x0 + 2"});
+    const ndc::System<S> system(problem);
+    const ndc::NewtonProjection<S> newton(system, 25);
+    std::vector<S> x{S(0), S(0.3)};
+    const auto r = newton.project(x);
+    CHECK_FALSE(r.converged);
+    CHECK(r.iterations == 25);
+    // The y coordinate is free: minimum-norm steps never move it.
+    CHECK(x[1] == S(0.3));
+  }
+}
+
+TEMPLATE_TEST_CASE("The residual tolerance scales with the precision and the terms", "[projection]",
+                   NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  using std::abs;
+  using std::sqrt;
+  const ndc::Problem problem = makeProblem(3, {"x0^2 + x1^2 - 1", "1000*x0 - 1000"}, 3);
+  const ndc::System<S> system(problem);
+  const ndc::NewtonProjection<S> newton(system);
+  const double eps = toDouble(ndc::ScalarTraits<S>::epsilon());
+  std::vector<S> x{S(1), S(0), S(0)}, tol(2);
+  newton.residualTolerance(x, tol);
+  // Both are a small multiple of eps times the magnitude of the terms (3 and 2000 here).
+  CHECK(toDouble(tol[0]) >= 3 * eps);
+  CHECK(toDouble(tol[0]) <= 100 * 3 * eps);
+  CHECK(toDouble(tol[1]) >= 2000 * eps);
+  CHECK(toDouble(tol[1]) <= 100 * 2000 * eps);
+  // Larger points, larger terms.
+  std::vector<S> far{S(10), S(0), S(0)}, tolFar(2);
+  newton.residualTolerance(far, tolFar);
+  CHECK(toDouble(tolFar[0]) > 30 * toDouble(tol[0]));
+}
+
+TEMPLATE_TEST_CASE("createProjection and projectCells", "[projection]", NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  using std::abs;
+  using std::sqrt;
+  const ndc::Problem problem = makeProblem(2, {"x0^2 + x1^2 - 1"}, 1.5);
+  const ndc::System<S> system(problem);
+  CHECK_THROWS_AS(ndc::createProjection<S>("bogus", system), ndc::InputError);
+  const ndc::Projection<S> projection = ndc::createProjection<S>("newton", system);
+
+  // Every cell of the 4 x 4 grid on [-1.5, 1.5]^2 (no centroid is at the origin).
+  ndc::SolutionCells cells;
+  cells.grid.n = 2;
+  cells.grid.depth = 2;
+  cells.grid.domain = problem.domain;
+  for (std::int32_t i = 0; i < 4; ++i) {
+    for (std::int32_t j = 0; j < 4; ++j) {
+      const std::int32_t index[2] = {i, j};
+      cells.add(index);
+    }
+  }
+  const ndc::Box<S> domain = problem.domainAs<S>();
+  double lastFraction = 0;
+  int calls = 0;
+  const ndc::Projections<S> out =
+      ndc::projectCells<S>(projection, cells, domain, [&](const char* stage, double f) {
+        CHECK(std::string(stage) == "projection");
+        CHECK(f >= lastFraction);
+        lastFraction = f;
+        ++calls;
+      });
+  CHECK(calls > 0);
+  CHECK(lastFraction == 1.0);
+  REQUIRE(out.n == 2);
+  REQUIRE(out.converged.size() == 16);
+  const ndc::Projector<S> project = ndc::makeProjector(projection);
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    const ndc::Box<S> box = ndc::cellBox<S>(cells.grid, domain, cells.cell(c));
+    std::vector<S> centre{(box.lo[0] + box.hi[0]) / 2, (box.lo[1] + box.hi[1]) / 2};
+    const S len = norm<S>(centre);
+    std::vector<S> nearest{centre[0] / len, centre[1] / len};
+    CHECK(out.converged[c] == 1);
+    CHECK(toDouble(distance<S>(out.at(c), nearest)) <= tight<S>());
+    // The Projector wrapper does the same.
+    const auto r = project(centre);
+    CHECK(r.converged);
+    CHECK(r.iterations == out.iterations[c]);
+    CHECK(toDouble(distance<S>(centre, out.at(c))) == 0.0);
+  }
+}
+
+TEMPLATE_TEST_CASE("Paper classification of known points", "[classification]", NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  using ndc::CellClass;
+  using std::abs;
+  using std::sqrt;
+  const ndc::PaperClassification paper;
+  const ndc::Box<S> box{{S(0), S(-1), S(2)}, {S(1), S(1), S(4)}};
+  const auto classify = [&](std::vector<S> p, bool converged) {
+    return paper.classify<S>(box, p, converged);
+  };
+  CHECK(classify({S(0.5), S(0), S(3)}, true) == CellClass::kNormal);
+  // The cell is closed: faces, edges and corners are inside.
+  CHECK(classify({S(1), S(0), S(3)}, true) == CellClass::kNormal);
+  CHECK(classify({S(0), S(-1), S(2)}, true) == CellClass::kNormal);
+  CHECK(classify({S(1), S(1), S(4)}, true) == CellClass::kNormal);
+  // Just outside one face: abnormal.
+  const S tiny = ndc::ScalarTraits<S>::epsilon() * 4;
+  CHECK(classify({S(1) + tiny, S(0), S(3)}, true) == CellClass::kAbnormal);
+  CHECK(classify({S(0.5), S(-1) - tiny, S(3)}, true) == CellClass::kAbnormal);
+  CHECK(classify({S(0.5), S(0), S(7)}, true) == CellClass::kAbnormal);
+  // No convergence: failed, wherever the point is.
+  CHECK(classify({S(0.5), S(0), S(3)}, false) == CellClass::kFailed);
+  CHECK(classify({S(9), S(9), S(9)}, false) == CellClass::kFailed);
+}
+
+TEMPLATE_TEST_CASE("classifyCells labels a grid from its projections", "[classification]",
+                   NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  using std::abs;
+  using std::sqrt;
+  CHECK_THROWS_AS(ndc::createClassification("bogus"), ndc::InputError);
+  const ndc::Classification classification = ndc::createClassification("paper");
+
+  const ndc::Problem problem = makeProblem(2, {"x0^2 + x1^2 - 1"}, 1.5);
+  ndc::SolutionCells cells;
+  cells.grid.n = 2;
+  cells.grid.depth = 2;
+  cells.grid.domain = problem.domain;
+  // Cells [0, 0.75] x [0.75, 1.5] (holds the projection of its centroid), [0, 0.75]^2
+  // (its point (0.8, 0.6) lies outside it) and [0.75, 1.5] x [0, 0.75] (marked not converged).
+  const std::int32_t indices[3][2] = {{2, 3}, {2, 2}, {3, 2}};
+  for (const auto& index : indices) cells.add(index);
+  ndc::Projections<S> projections;
+  projections.n = 2;
+  projections.point = {S(0.375) / sqrt(S(0.375 * 0.375 + 1.125 * 1.125)),
+                       S(1.125) / sqrt(S(0.375 * 0.375 + 1.125 * 1.125)),
+                       S(0.8),
+                       S(0.6),
+                       S(1),
+                       S(0.2)};
+  projections.converged = {1, 1, 0};
+  projections.iterations = {3, 3, 40};
+  const std::vector<ndc::CellClass> classes =
+      ndc::classifyCells<S>(classification, cells, problem.domainAs<S>(), projections);
+  REQUIRE(classes.size() == 3);
+  CHECK(classes[0] == ndc::CellClass::kNormal);
+  CHECK(classes[1] == ndc::CellClass::kAbnormal);
+  CHECK(classes[2] == ndc::CellClass::kFailed);
+}
