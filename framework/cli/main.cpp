@@ -1,0 +1,89 @@
+// The `ndcontour` command-line tool (design.md 4.2). Every error ends the program with one
+// line on standard error: status 2 for bad input or usage, 1 for an internal error.
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "cli/commands.hpp"
+#include "cli/solve_options.hpp"
+#include "problem.hpp"
+
+namespace {
+
+/// Exit statuses of the tool.
+constexpr int kExitInternal = 1;
+constexpr int kExitBadInput = 2;
+constexpr int kExitNotAvailable = 3;
+
+std::string oneLine(std::string text) {
+  for (char& c : text)
+    if (c == '\n' || c == '\r') c = ' ';
+  return text;
+}
+
+int run(int argc, char** argv) {
+  CLI::App app{"ndcontour: contouring 1- and 2-manifolds in arbitrary dimensions", "ndcontour"};
+  app.set_version_flag("--version", std::string("ndcontour ") + NDC_VERSION);
+  app.require_subcommand(1);
+
+  std::string infoPath;
+  CLI::App* info = app.add_subcommand("info", "Describe a problem file");
+  info->add_option("problem", infoPath, "Problem file (TOML, design.md 4.1)")
+      ->required()
+      ->type_name("PROBLEM.toml");
+
+  ndc::cli::SolveOptions solveOptions;
+  CLI::App* solve = app.add_subcommand("solve", "Contour the zero set of a problem");
+  ndc::cli::addSolveOptions(*solve, solveOptions);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version: CLI11 prints them and the status is 0.
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::string message = e.what();
+    const std::vector<std::string> extra = app.remaining();
+    if (app.get_subcommands().empty() && !extra.empty() && extra.front().starts_with("-"))
+      message = "unknown option '" + extra.front() + "'";
+    else if (app.get_subcommands().empty() && !extra.empty())
+      message = "unknown subcommand '" + extra.front() + "' (accepted: info, solve)";
+    else if (app.get_subcommands().empty())
+      message = "a subcommand is required (accepted: info, solve)";
+    std::cerr << "ndcontour: " << oneLine(message) << " (see ndcontour --help)\n";
+    return kExitBadInput;
+  }
+
+  if (info->parsed()) {
+    ndc::cli::printInfo(ndc::loadProblem(infoPath), std::cout);
+    return 0;
+  }
+
+  // solve: options first (they need no file), then the problem, then both together.
+  ndc::cli::validateSolveOptions(solveOptions);
+  const ndc::Problem problem = ndc::loadProblem(solveOptions.problemPath);
+  ndc::cli::validateSolveOptions(solveOptions, problem);
+  std::cerr << "ndcontour: solve is not available yet (pipeline issue #3)\n";
+  return kExitNotAvailable;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const ndc::InputError& e) {
+    std::cerr << oneLine(e.what()) << '\n';
+    return kExitBadInput;
+  } catch (const ndc::cli::UsageError& e) {
+    std::cerr << "ndcontour: " << oneLine(e.what()) << '\n';
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::cerr << "ndcontour: internal error: " << oneLine(e.what()) << '\n';
+    return kExitInternal;
+  } catch (...) {
+    std::cerr << "ndcontour: internal error: unknown exception\n";
+    return kExitInternal;
+  }
+}

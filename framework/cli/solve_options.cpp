@@ -1,0 +1,134 @@
+// Parsing and validation of the `solve` options (design.md 4.2).
+#include "cli/solve_options.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+
+#include "grid.hpp"
+
+namespace ndc::cli {
+
+namespace {
+
+template <std::size_t N>
+std::string joined(const std::array<std::string_view, N>& names) {
+  std::string text;
+  for (std::size_t i = 0; i < N; ++i) text += (i ? "|" : "") + std::string(names[i]);
+  return text;
+}
+
+/// Rejects a strategy name that is not among `names`, naming the accepted ones.
+template <std::size_t N>
+void checkName(const std::string& flag, const std::string& value,
+               const std::array<std::string_view, N>& names, const std::string& family) {
+  if (std::find(names.begin(), names.end(), value) != names.end()) return;
+  std::string accepted;
+  for (std::size_t i = 0; i < N; ++i) accepted += (i ? ", " : "") + std::string(names[i]);
+  throw UsageError(flag + ": unknown " + family + " '" + value + "' (accepted: " + accepted + ")");
+}
+
+/// Accepts a decimal integer in [0, max]: CLI11 would wrap "-3" or an overflow silently.
+CLI::Validator unsignedUpTo(std::uint64_t max) {
+  return CLI::Validator(
+      [max](std::string& text) -> std::string {
+        std::uint64_t value = 0;
+        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+        if (text.empty() || ec != std::errc() || end != text.data() + text.size() || max < value)
+          return "'" + text + "' is not an integer in 0.." + std::to_string(max);
+        return "";
+      },
+      "", "unsigned");
+}
+
+}  // namespace
+
+void addSolveOptions(CLI::App& solve, SolveOptions& o) {
+  Settings& s = o.settings;
+  solve.add_option("problem", o.problemPath, "Problem file (TOML, design.md 4.1)")
+      ->required()
+      ->type_name("PROBLEM.toml");
+  solve.add_option("--depth", s.depth, "Subdivision depth L: 2^L cells per axis")
+      ->type_name("L")
+      ->capture_default_str();
+  solve.add_option("--tolerance", o.tolerance, "Newton tolerance h (default: from the scalar)")
+      ->type_name("h");
+  solve.add_option("--bounding", s.bounding, "Bounding strategy")
+      ->type_name(joined(kBoundingNames))
+      ->capture_default_str();
+  solve.add_option("--subdivision", s.subdivision, "Subdivision strategy")
+      ->type_name(joined(kSubdivisionNames))
+      ->capture_default_str();
+  solve.add_option("--scalar", s.scalar, "Scalar type of the whole run")
+      ->type_name(joined(kScalarNames))
+      ->capture_default_str();
+  solve
+      .add_option("--precision", o.precision,
+                  "Working precision in bits of --scalar mpfr (default " +
+                      std::to_string(kDefaultMpfrPrecision) + ")")
+      ->type_name("BITS");
+  solve.add_option("--classification", s.classification, "Classification strategy")
+      ->type_name(joined(kClassificationNames))
+      ->capture_default_str();
+  solve.add_option("--connection", s.connection, "Connection strategy")
+      ->type_name(joined(kConnectionNames))
+      ->capture_default_str();
+  solve.add_option("--jitter", s.jitter, "Seed of a grid jitter (default: no jitter)")
+      ->check(unsignedUpTo(std::numeric_limits<std::uint64_t>::max()))
+      ->type_name("SEED");
+  solve.add_option("--out", o.outDir, "Write summary.json, mesh.ply and cells.csv to DIR")
+      ->type_name("DIR");
+  solve.add_flag("--json", o.json, "Print the summary (JSON) on standard output, nothing else");
+}
+
+void validateSolveOptions(SolveOptions& o) {
+  Settings& s = o.settings;
+  checkName("--bounding", s.bounding, kBoundingNames, "bounding strategy");
+  checkName("--subdivision", s.subdivision, kSubdivisionNames, "subdivision strategy");
+  checkName("--classification", s.classification, kClassificationNames, "classification strategy");
+  checkName("--connection", s.connection, kConnectionNames, "connection strategy");
+  checkName("--scalar", s.scalar, kScalarNames, "scalar type");
+
+  if (s.depth < kMinDepth || s.depth > kMaxDepth)
+    throw UsageError("--depth " + std::to_string(s.depth) + " is out of range (accepted: " +
+                     std::to_string(kMinDepth) + ".." + std::to_string(kMaxDepth) + ")");
+
+  // The precision belongs to the scalar: double is always 53 bits.
+  if (o.precision) {
+    if (*o.precision < kMinPrecision || *o.precision > kMaxPrecision)
+      throw UsageError("--precision " + std::to_string(*o.precision) +
+                       " is out of range (accepted: " + std::to_string(kMinPrecision) + ".." +
+                       std::to_string(kMaxPrecision) + " bits)");
+    if (s.scalar == "double" && *o.precision != 53)
+      throw UsageError("--precision " + std::to_string(*o.precision) +
+                       " needs --scalar mpfr (double has 53 bits)");
+  }
+  s.precisionBits = s.scalar == "double" ? 53 : o.precision.value_or(kDefaultMpfrPrecision);
+
+  if (o.tolerance && !(std::isfinite(*o.tolerance) && *o.tolerance > 0))
+    throw UsageError("--tolerance must be a positive finite number");
+
+  // An existing output must be a directory; the pipeline decides what it may overwrite.
+  if (o.outDir) {
+    std::error_code ec;
+    if (o.outDir->empty()) throw UsageError("--out: empty directory name");
+    if (std::filesystem::exists(*o.outDir, ec) && !std::filesystem::is_directory(*o.outDir, ec))
+      throw UsageError("--out " + *o.outDir + ": exists and is not a directory");
+  }
+}
+
+void validateSolveOptions(const SolveOptions& o, const Problem& problem) {
+  // Cells are keyed by a packed 64-bit multi-index of n * L bits (grid.hpp).
+  if (!Grid::fits(problem.n(), o.settings.depth))
+    throw UsageError("--depth " + std::to_string(o.settings.depth) + " is too deep for the " +
+                     std::to_string(problem.n()) + " variables of " + problem.path +
+                     ": n * depth must be at most 64 (accepted: depth <= " +
+                     std::to_string(std::min(kMaxDepth, 64 / problem.n())) + ")");
+}
+
+}  // namespace ndc::cli

@@ -1,0 +1,64 @@
+/// \file solve_options.hpp
+/// The options of `ndcontour solve` (design.md 4.2), parsed and validated before the pipeline
+/// runs, so that every bad value exits with status 2 and one line on standard error.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+#include "problem.hpp"
+#include "summary.hpp"
+
+namespace CLI {
+class App;
+}
+
+namespace ndc::cli {
+
+/// A bad command line (unknown strategy, value out of range, ...). The CLI prints
+/// `ndcontour: what()` and exits with status 2, like InputError.
+class UsageError : public std::runtime_error {
+ public:
+  explicit UsageError(const std::string& message) : std::runtime_error(message) {}
+};
+
+/// Names accepted on the command line for each strategy family and the scalar type.
+inline constexpr std::array<std::string_view, 2> kBoundingNames = {"bernstein", "interval"};
+inline constexpr std::array<std::string_view, 2> kSubdivisionNames = {"uniform", "binary"};
+inline constexpr std::array<std::string_view, 1> kClassificationNames = {"paper"};
+inline constexpr std::array<std::string_view, 3> kConnectionNames = {"paper", "naive", "crossing"};
+inline constexpr std::array<std::string_view, 2> kScalarNames = {"double", "mpfr"};
+
+/// Accepted ranges of the numeric options.
+inline constexpr int kMinDepth = 1, kMaxDepth = 30;
+inline constexpr unsigned kMinPrecision = 24, kMaxPrecision = 4096;
+/// Working precision of `--scalar mpfr` when `--precision` is not given.
+inline constexpr unsigned kDefaultMpfrPrecision = 128;
+
+/// Everything `ndcontour solve` was asked to do.
+struct SolveOptions {
+  std::string problemPath;  ///< PROBLEM.toml
+  /// `--depth`, the strategy names, `--scalar`, `--precision` (53 for double) and `--jitter`;
+  /// defaults as in Settings.
+  Settings settings;
+  std::optional<unsigned> precision;  ///< `--precision BITS` as given (before defaulting)
+  std::optional<double> tolerance;    ///< `--tolerance h`: unset lets the pipeline choose
+  std::optional<std::string> outDir;  ///< `--out DIR`: write summary.json, mesh.ply, cells.csv
+  bool json = false;                  ///< `--json`: the summary on standard output, nothing else
+};
+
+/// Declares the options of the `solve` subcommand on `solve`, writing into `options`.
+void addSolveOptions(CLI::App& solve, SolveOptions& options);
+
+/// Checks the option values on their own (strategy names, ranges) and fills defaults that
+/// depend on other options (precision of the scalar); throws UsageError.
+void validateSolveOptions(SolveOptions& options);
+
+/// Checks the options against the loaded problem (the depth must fit the cell index for n
+/// variables); throws UsageError.
+void validateSolveOptions(const SolveOptions& options, const Problem& problem);
+
+}  // namespace ndc::cli

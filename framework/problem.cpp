@@ -1,0 +1,359 @@
+// Problem files (design.md 4.1): reading, validation and error positions.
+#include "problem.hpp"
+
+#include <toml++/toml.h>
+
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "scalar.hpp"
+
+namespace ndc {
+
+namespace {
+
+/// Replaces line breaks so that every message stays on one line.
+std::string oneLine(std::string text) {
+  for (char& c : text)
+    if (c == '\n' || c == '\r') c = ' ';
+  return text;
+}
+
+/// A human name for the type of a TOML node, for "wrong type" messages.
+std::string typeName(const toml::node& node) {
+  switch (node.type()) {
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a float";
+    case toml::node_type::boolean:
+      return "a boolean";
+    case toml::node_type::array:
+      return "an array";
+    case toml::node_type::table:
+      return "a table";
+    case toml::node_type::date:
+      return "a date";
+    case toml::node_type::time:
+      return "a time";
+    case toml::node_type::date_time:
+      return "a date-time";
+    default:
+      return "nothing";
+  }
+}
+
+bool isIdentifier(const std::string& s) {
+  if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
+  for (char c : s)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) return false;
+  return true;
+}
+
+bool isProblemName(const std::string& s) {
+  if (s.empty()) return false;
+  for (char c : s)
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-'))
+      return false;
+  return true;
+}
+
+/// Position in the file of byte `target` (0-based) of the decoded value of the TOML string
+/// whose opening quote is at (line, column). Decodes escapes and multi-line strings so that an
+/// expression column lands on the right character of the file; falls back to the quote.
+std::pair<int, int> stringPosition(const std::string& text, int line, int column, int target) {
+  // Find the byte offset of (line, column); toml++ counts columns in code points.
+  std::size_t pos = 0;
+  for (int l = 1; l < line && pos < text.size(); ++l) {
+    pos = text.find('\n', pos);
+    if (pos == std::string::npos) return {line, column};
+    ++pos;
+  }
+  for (int c = 1; c < column && pos < text.size(); ++c) {
+    ++pos;
+    while (pos < text.size() && (static_cast<unsigned char>(text[pos]) & 0xC0) == 0x80) ++pos;
+  }
+  if (pos >= text.size() || (text[pos] != '"' && text[pos] != '\'')) return {line, column};
+
+  const bool literal = text[pos] == '\'';
+  const bool multi = text.compare(pos, 3, literal ? "'''" : "\"\"\"") == 0;
+  int ln = line, col = column;
+  auto advance = [&](std::size_t bytes) {
+    for (std::size_t i = 0; i < bytes && pos < text.size(); ++i, ++pos) {
+      const unsigned char c = static_cast<unsigned char>(text[pos]);
+      if (c == '\n') {
+        ++ln;
+        col = 1;
+      } else if ((c & 0xC0) != 0x80) {
+        ++col;
+      }
+    }
+  };
+  advance(multi ? 3 : 1);
+  // A multi-line string drops a newline right after its opening delimiter.
+  if (multi && text.compare(pos, 1, "\n") == 0) advance(1);
+  if (multi && text.compare(pos, 2, "\r\n") == 0) advance(2);
+
+  int decoded = 0;
+  while (pos < text.size() && decoded < target) {
+    const char c = text[pos];
+    if (!literal && c == '\\' && pos + 1 < text.size()) {
+      const char e = text[pos + 1];
+      if (e == 'u' || e == 'U') {
+        // \uXXXX or \UXXXXXXXX: count the UTF-8 bytes of the code point.
+        const std::size_t len = e == 'u' ? 4 : 8;
+        unsigned long cp = std::strtoul(text.substr(pos + 2, len).c_str(), nullptr, 16);
+        decoded += cp < 0x80 ? 1 : cp < 0x800 ? 2 : cp < 0x10000 ? 3 : 4;
+        advance(2 + len);
+      } else if (multi && (e == ' ' || e == '\t' || e == '\n' || e == '\r')) {
+        // Line-ending backslash: it and the following whitespace decode to nothing.
+        advance(1);
+        while (pos < text.size() && std::isspace(static_cast<unsigned char>(text[pos]))) advance(1);
+      } else {
+        decoded += 1;
+        advance(2);
+      }
+    } else {
+      decoded += 1;
+      advance(1);
+    }
+  }
+  return {ln, col};
+}
+
+/// Validation of one parsed TOML document; every failure is an InputError at a position.
+class Validator {
+ public:
+  Validator(const std::string& text, const std::string& file) : text_(text), file_(file) {}
+
+  Problem run(const toml::table& root) {
+    Problem p;
+    p.path = file_;
+
+    // Application problems (paper, Sec. 3) have their own tables: a later issue.
+    if (const toml::node* app = root.get("application"))
+      fail(*app, "application problems are not supported yet");
+
+    // Every top-level key must be known: a typo must not silently drop data.
+    static const std::set<std::string> kKnown = {"name",   "description", "variables",
+                                                 "domain", "equations",   "expect"};
+    for (auto&& [key, node] : root)
+      if (!kKnown.count(std::string(key.str())))
+        fail(key.source(), "unknown key '" + std::string(key.str()) +
+                               "' (known: name, description, variables, domain, equations, "
+                               "expect)");
+
+    // name: required, [a-z0-9._-]+ so that it can name files and result ids.
+    const toml::node& name = require(root, "name");
+    p.name = stringOf(name, "name");
+    if (!isProblemName(p.name)) fail(name, "name '" + p.name + "' must match [a-z0-9._-]+");
+    problem_ = p.name;
+
+    if (const toml::node* description = root.get("description"))
+      p.description = stringOf(*description, "description");
+
+    // variables: n >= 2 distinct identifiers.
+    const toml::node& variables = require(root, "variables");
+    const toml::array& vars = arrayOf(variables, "variables");
+    std::set<std::string> seen;
+    for (std::size_t i = 0; i < vars.size(); ++i) {
+      const std::string v = stringOf(vars[i], "variables[" + std::to_string(i) + "]");
+      if (!isIdentifier(v))
+        fail(vars[i], "variable '" + v + "' is not an identifier ([A-Za-z_][A-Za-z0-9_]*)");
+      if (!seen.insert(v).second) fail(vars[i], "variable '" + v + "' is listed twice");
+      p.variables.push_back(v);
+    }
+    if (p.variables.size() < 2)
+      fail(variables,
+           "a problem needs at least 2 variables, got " + std::to_string(p.variables.size()));
+    const int n = p.n();
+
+    // domain: one finite [lo, hi] per variable with lo < hi.
+    const toml::node& domain = require(root, "domain");
+    const toml::array& ranges = arrayOf(domain, "domain");
+    if (static_cast<int>(ranges.size()) != n)
+      fail(domain, "domain has " + std::to_string(ranges.size()) + " intervals but there are " +
+                       std::to_string(n) + " variables");
+    for (int j = 0; j < n; ++j) {
+      const std::string what = "domain of '" + p.variables[j] + "'";
+      const toml::array* r = ranges[j].as_array();
+      if (!r || r->size() != 2) fail(ranges[j], what + " must be an array [lo, hi] of 2 numbers");
+      const double lo = numberOf((*r)[0], what + ": lo");
+      const double hi = numberOf((*r)[1], what + ": hi");
+      if (!(lo < hi))
+        fail(ranges[j], what + " is empty or inverted: lo = " + format(lo) +
+                            " is not less than hi = " + format(hi));
+      p.domain.lo.push_back(lo);
+      p.domain.hi.push_back(hi);
+    }
+
+    // equations: 1 <= m <= n-1 polynomial expressions in the variables.
+    const toml::node& equations = require(root, "equations");
+    const toml::array& eqs = arrayOf(equations, "equations");
+    const int m = static_cast<int>(eqs.size());
+    if (m < 1 || m > n - 1)
+      fail(equations, "there must be between 1 and n-1 = " + std::to_string(n - 1) +
+                          " equations for n = " + std::to_string(n) + " variables, got " +
+                          std::to_string(m));
+    for (int i = 0; i < m; ++i) p.equations.push_back(parseEquation(eqs[i], i, p.variables));
+
+    if (const toml::node* expect = root.get("expect")) p.expect = parseExpect(*expect);
+    return p;
+  }
+
+ private:
+  [[noreturn]] void fail(const toml::source_region& where, const std::string& message) const {
+    throw InputError::at(file_, static_cast<int>(where.begin.line),
+                         static_cast<int>(where.begin.column), where_() + message);
+  }
+  [[noreturn]] void fail(const toml::node& node, const std::string& message) const {
+    fail(node.source(), message);
+  }
+  /// Prefix naming the problem once its name is known.
+  std::string where_() const { return problem_.empty() ? "" : "problem '" + problem_ + "': "; }
+
+  const toml::node& require(const toml::table& root, const std::string& key) const {
+    const toml::node* node = root.get(key);
+    if (!node) throw InputError::at(file_, 0, 0, where_() + "missing required key '" + key + "'");
+    return *node;
+  }
+
+  std::string stringOf(const toml::node& node, const std::string& what) const {
+    if (const auto* s = node.as_string()) return s->get();
+    fail(node, what + " must be a string, not " + typeName(node));
+  }
+
+  const toml::array& arrayOf(const toml::node& node, const std::string& what) const {
+    if (const auto* a = node.as_array()) return *a;
+    fail(node, what + " must be an array, not " + typeName(node));
+  }
+
+  double numberOf(const toml::node& node, const std::string& what) const {
+    double v;
+    if (const auto* i = node.as_integer())
+      v = static_cast<double>(i->get());
+    else if (const auto* f = node.as_floating_point())
+      v = f->get();
+    else
+      fail(node, what + " must be a number, not " + typeName(node));
+    // TOML allows inf and nan; a domain needs finite bounds.
+    if (!std::isfinite(v)) fail(node, what + " must be finite, not " + format(v));
+    return v;
+  }
+
+  static std::string format(double v) {
+    std::ostringstream s;
+    s.precision(17);
+    s << v;
+    return s.str();
+  }
+
+  Expression parseEquation(const toml::node& node, int i,
+                           const std::vector<std::string>& variables) const {
+    const std::string what = "equation " + std::to_string(i + 1);
+    const std::string source = stringOf(node, what);
+    try {
+      Expression e = Expression::parse(source, variables);
+      // A constant equation is either everywhere or nowhere zero: never a manifold.
+      bool constant = true;
+      for (int d : e.degrees()) constant = constant && d == 0;
+      if (constant) fail(node, what + " is constant (it uses no variable): '" + source + "'");
+      return e;
+    } catch (const ExpressionError& error) {
+      // Map the expression column to the file through the string's source position.
+      const auto [line, column] = stringPosition(text_, static_cast<int>(node.source().begin.line),
+                                                 static_cast<int>(node.source().begin.column),
+                                                 std::max(0, error.column() - 1));
+      throw InputError::at(file_, line, column, where_() + what + ": " + error.what());
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& error) {
+      fail(node, what + ": " + error.what());
+    }
+  }
+
+  Expectation parseExpect(const toml::node& node) const {
+    const toml::table* table = node.as_table();
+    if (!table) fail(node, "expect must be a table, not " + typeName(node));
+    Expectation expect;
+    for (auto&& [key, value] : *table) {
+      const std::string k(key.str());
+      const auto* i = value.as_integer();
+      if (!i) fail(value, "expect." + k + " must be an integer, not " + typeName(value));
+      if (k == "components")
+        expect.components = i->get();
+      else if (k == "euler_characteristic")
+        expect.eulerCharacteristic = i->get();
+      else
+        expect.other[k] = i->get();
+    }
+    return expect;
+  }
+
+  const std::string& text_;
+  const std::string& file_;
+  std::string problem_;
+};
+
+}  // namespace
+
+InputError InputError::at(const std::string& file, int line, int column,
+                          const std::string& message) {
+  // Appends piecewise (GCC 12 warns falsely on `":" + std::to_string(...)`).
+  std::string text = file;
+  if (line > 0) {
+    text.append(":").append(std::to_string(line));
+    if (column > 0) text.append(":").append(std::to_string(column));
+  }
+  text.append(": ").append(message);
+  return InputError(oneLine(std::move(text)));
+}
+
+Problem parseProblem(const std::string& text, const std::string& file) {
+  toml::table root;
+  try {
+    root = toml::parse(text, std::string_view(file));
+  } catch (const toml::parse_error& error) {
+    throw InputError::at(file, static_cast<int>(error.source().begin.line),
+                         static_cast<int>(error.source().begin.column),
+                         "TOML syntax error: " + std::string(error.description()));
+  }
+  return Validator(text, file).run(root);
+}
+
+Problem loadProblem(const std::filesystem::path& file) {
+  const std::string name = file.string();
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec))
+    throw InputError::at(name, 0, 0, "cannot read the problem file: it is a directory");
+  std::ifstream in(file, std::ios::binary);
+  if (!in)
+    throw InputError::at(name, 0, 0,
+                         std::string("cannot read the problem file: ") + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError::at(name, 0, 0, "cannot read the problem file: read error");
+  return parseProblem(text.str(), name);
+}
+
+template <class S>
+Box<S> Problem::domainAs() const {
+  Box<S> box;
+  for (int j = 0; j < n(); ++j) {
+    box.lo.push_back(S(domain.lo[j]));
+    box.hi.push_back(S(domain.hi[j]));
+  }
+  return box;
+}
+
+template Box<double> Problem::domainAs<double>() const;
+template Box<Mpfr> Problem::domainAs<Mpfr>() const;
+
+}  // namespace ndc

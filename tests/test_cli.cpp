@@ -1,0 +1,262 @@
+// The command-line tool as a process (design.md 4.2): --help, --version, `info` on every
+// example, and every class of bad input exits with status 2 and one line on standard error.
+#include <catch2/catch.hpp>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "problem.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A scratch directory for this test process, removed at exit.
+const fs::path& scratch() {
+  struct Dir {
+    fs::path path = fs::temp_directory_path() / ("ndc-test-cli-" + std::to_string(::getpid()));
+    Dir() { fs::create_directories(path); }
+    ~Dir() {
+      std::error_code ec;
+      fs::remove_all(path, ec);
+    }
+  };
+  static const Dir dir;
+  return dir.path;
+}
+
+std::string quoted(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+std::string slurp(const fs::path& file) {
+  std::ifstream in(file);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+struct Run {
+  int status = -1;
+  std::string out, err;
+};
+
+/// Runs `ndcontour ARGS` (ARGS already shell-quoted) and captures status, stdout and stderr.
+Run ndcontour(const std::string& args) {
+  const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt";
+  const std::string command = quoted(ndc::test::binaryPath()) + " " + args + " >" +
+                              quoted(out.string()) + " 2>" + quoted(err.string()) + " </dev/null";
+  const int raw = std::system(command.c_str());
+  Run run;
+  run.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  run.out = slurp(out);
+  run.err = slurp(err);
+  return run;
+}
+
+/// Writes `text` to a scratch file and returns its path.
+fs::path writeProblem(const std::string& name, const std::string& text) {
+  const fs::path file = scratch() / name;
+  std::ofstream(file) << text;
+  return file;
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+/// Status 2, nothing on stdout, exactly one line on stderr holding every part.
+void checkBadInput(const Run& run, std::initializer_list<std::string> parts) {
+  INFO("stderr: " << run.err << "stdout: " << run.out);
+  CHECK(run.status == 2);
+  CHECK(run.out.empty());
+  CHECK(std::count(run.err.begin(), run.err.end(), '\n') == 1);
+  CHECK((!run.err.empty() && run.err.back() == '\n'));
+  for (const auto& part : parts) CHECK(contains(run.err, part));
+}
+
+const std::string kValid =
+    "name = \"p\"\nvariables = [\"x\", \"y\"]\ndomain = [[-2, 2], [-2, 2]]\n"
+    "equations = [\"x^2 + y^2 - 1\"]\n";
+
+fs::path problemsDir() { return fs::path(ndc::test::sourceDir()) / "experiments" / "problems"; }
+
+}  // namespace
+
+TEST_CASE("cli: --help and --version", "[cli]") {
+  const Run help = ndcontour("--help");
+  CHECK(help.status == 0);
+  CHECK(contains(help.out, "info"));
+  CHECK(contains(help.out, "solve"));
+
+  const Run solveHelp = ndcontour("solve --help");
+  CHECK(solveHelp.status == 0);
+  for (const char* flag :
+       {"--depth", "--tolerance", "--bounding", "--subdivision", "--scalar", "--precision",
+        "--classification", "--connection", "--jitter", "--out", "--json"})
+    CHECK(contains(solveHelp.out, flag));
+  CHECK(contains(solveHelp.out, "paper|naive|crossing"));
+
+  const Run version = ndcontour("--version");
+  CHECK(version.status == 0);
+  CHECK(version.out == std::string("ndcontour ") + NDC_VERSION + "\n");
+}
+
+TEST_CASE("cli: info on every example problem", "[cli]") {
+  int count = 0;
+  for (const auto& entry : fs::directory_iterator(problemsDir())) {
+    if (entry.path().extension() != ".toml") continue;
+    ++count;
+    const ndc::Problem p = ndc::loadProblem(entry.path());
+    const Run run = ndcontour("info " + quoted(entry.path().string()));
+    INFO(entry.path().string() << "\nstdout:\n" << run.out << "stderr:\n" << run.err);
+    CHECK(run.status == 0);
+    CHECK(run.err.empty());
+    CHECK(contains(run.out, "name: " + p.name + "\n"));
+    CHECK(contains(run.out, "\nn: " + std::to_string(p.n()) + "\n"));
+    CHECK(contains(run.out, "\nk: " + std::to_string(p.k()) + "\n"));
+    CHECK(contains(run.out, "\nm: " + std::to_string(p.m()) + "\n"));
+    CHECK(contains(run.out, "components: " + std::to_string(*p.expect.components) + "\n"));
+  }
+  CHECK(count >= 10);
+
+  // Degrees and coefficient counts of the torus: degree 4 in x, y, z, 5^3 coefficients.
+  const Run torus = ndcontour("info " + quoted((problemsDir() / "torus.toml").string()));
+  CHECK(contains(torus.out, "(x^2+y^2+z^2+0.84)^2 - 4*(x^2+y^2)"));
+  CHECK(contains(torus.out, "degrees: x 4 y 4 z 4"));
+  CHECK(contains(torus.out, "coefficients: 125"));
+  CHECK(contains(torus.out, "z in [-0.5, 0.5]"));
+  CHECK(contains(torus.out, "euler_characteristic: 0"));
+}
+
+TEST_CASE("cli: every class of bad problem file exits 2 with one line", "[cli]") {
+  struct Case {
+    const char* name;
+    std::string text;
+    std::string part;
+  };
+  const std::string vars = "name = \"p\"\nvariables = [\"x\", \"y\"]\n";
+  const std::string dom = "domain = [[-2, 2], [-2, 2]]\n";
+  const std::vector<Case> cases = {
+      {"syntax.toml", "name = \"p\"\nvariables = [\"x\" \"y\"]\n", "TOML syntax error"},
+      {"missing-key.toml", vars + dom, "missing required key 'equations'"},
+      {"unknown-variable.toml", vars + dom + "equations = [\"x^2 + q\"]\n", "equation 1"},
+      {"function-call.toml", vars + dom + "equations = [\"sin(x) + y\"]\n", "equation 1"},
+      {"non-integer-exponent.toml", vars + dom + "equations = [\"x^2.5 + y\"]\n", "exponent"},
+      {"negative-exponent.toml", vars + dom + "equations = [\"x^-1 + y\"]\n", "exponent"},
+      {"division.toml", vars + dom + "equations = [\"1/(x + y)\"]\n", "division by a non-constant"},
+      {"zero-equations.toml", vars + dom + "equations = []\n", "got 0"},
+      {"too-many-equations.toml", vars + dom + "equations = [\"x\", \"y\"]\n", "got 2"},
+      {"domain-count.toml", vars + "domain = [[-2, 2]]\nequations = [\"x - y\"]\n",
+       "domain has 1 intervals"},
+      {"inverted.toml", vars + "domain = [[-2, 2], [3, 2]]\nequations = [\"x - y\"]\n",
+       "empty or inverted"},
+      {"nan.toml", vars + "domain = [[nan, 2], [0, 2]]\nequations = [\"x - y\"]\n",
+       "must be finite"},
+      {"inf.toml", vars + "domain = [[0, inf], [0, 2]]\nequations = [\"x - y\"]\n",
+       "must be finite"},
+      {"bad-name.toml", "name = \"Bad Name\"\n", "must match [a-z0-9._-]+"},
+      {"unknown-key.toml", kValid + "colour = \"red\"\n", "unknown key 'colour'"},
+      {"wrong-type.toml", "name = \"p\"\nvariables = \"x y\"\n", "variables must be an array"},
+      {"one-variable.toml", "name = \"p\"\nvariables = [\"x\"]\n", "at least 2 variables"},
+      {"application.toml", "application = \"bisector\"\n" + kValid, "not supported yet"},
+      {"duplicate-variable.toml", "name = \"p\"\nvariables = [\"x\", \"x\"]\n", "listed twice"},
+  };
+  for (const Case& c : cases) {
+    const fs::path file = writeProblem(c.name, c.text);
+    INFO(c.name);
+    for (const char* command : {"info ", "solve "}) {
+      checkBadInput(ndcontour(command + quoted(file.string())), {file.string() + ":", c.part});
+    }
+  }
+
+  // Positions: the TOML error's line and column, and an expression error's file column.
+  const fs::path syntax = scratch() / "syntax.toml";
+  CHECK(contains(ndcontour("info " + quoted(syntax.string())).err, syntax.string() + ":2:"));
+  const fs::path unknown = scratch() / "unknown-variable.toml";
+  CHECK(contains(ndcontour("info " + quoted(unknown.string())).err, unknown.string() + ":4:21:"));
+}
+
+TEST_CASE("cli: unreadable problem files exit 2 with one line", "[cli]") {
+  const fs::path missing = scratch() / "no-such-problem.toml";
+  checkBadInput(ndcontour("info " + quoted(missing.string())),
+                {missing.string(), "No such file or directory"});
+  checkBadInput(ndcontour("solve " + quoted(missing.string())),
+                {missing.string(), "No such file or directory"});
+  checkBadInput(ndcontour("info " + quoted(scratch().string())),
+                {scratch().string(), "is a directory"});
+}
+
+TEST_CASE("cli: usage errors exit 2 with one line", "[cli]") {
+  const std::string valid = quoted(writeProblem("valid.toml", kValid).string());
+  checkBadInput(ndcontour(""), {"subcommand is required"});
+  checkBadInput(ndcontour("frobnicate"), {"unknown subcommand 'frobnicate'", "info, solve"});
+  checkBadInput(ndcontour("--frobnicate"), {"unknown option '--frobnicate'"});
+  checkBadInput(ndcontour("info"), {"problem"});
+  checkBadInput(ndcontour("info " + valid + " extra"), {"extra"});
+  checkBadInput(ndcontour("solve"), {"problem"});
+  checkBadInput(ndcontour("solve " + valid + " --frobnicate"), {"frobnicate"});
+
+  // Unknown strategy names list the accepted ones.
+  checkBadInput(ndcontour("solve " + valid + " --bounding taylor"),
+                {"--bounding", "'taylor'", "bernstein, interval"});
+  checkBadInput(ndcontour("solve " + valid + " --subdivision octree"),
+                {"--subdivision", "'octree'", "uniform, binary"});
+  checkBadInput(ndcontour("solve " + valid + " --classification magic"),
+                {"--classification", "'magic'", "paper"});
+  checkBadInput(ndcontour("solve " + valid + " --connection mc"),
+                {"--connection", "'mc'", "paper, naive, crossing"});
+  checkBadInput(ndcontour("solve " + valid + " --scalar float"),
+                {"--scalar", "'float'", "double, mpfr"});
+
+  // Ranges and conversions.
+  checkBadInput(ndcontour("solve " + valid + " --depth 0"), {"--depth", "1..30"});
+  checkBadInput(ndcontour("solve " + valid + " --depth 31"), {"--depth", "1..30"});
+  checkBadInput(ndcontour("solve " + valid + " --depth two"), {"--depth"});
+  checkBadInput(ndcontour("solve " + valid + " --depth"), {"--depth"});
+  checkBadInput(ndcontour("solve " + valid + " --scalar mpfr --precision 8"),
+                {"--precision", "24..4096"});
+  checkBadInput(ndcontour("solve " + valid + " --scalar mpfr --precision 5000"),
+                {"--precision", "24..4096"});
+  checkBadInput(ndcontour("solve " + valid + " --precision 100"), {"--precision", "mpfr"});
+  checkBadInput(ndcontour("solve " + valid + " --tolerance -1"), {"--tolerance"});
+  checkBadInput(ndcontour("solve " + valid + " --tolerance 0"), {"--tolerance"});
+  checkBadInput(ndcontour("solve " + valid + " --jitter abc"), {"--jitter"});
+  checkBadInput(ndcontour("solve " + valid + " --jitter -3"), {"--jitter", "not an integer"});
+  checkBadInput(ndcontour("solve " + valid + " --jitter 1e3"), {"--jitter", "not an integer"});
+  checkBadInput(ndcontour("solve " + valid + " --scalar mpfr --precision -5"), {"--precision"});
+  checkBadInput(ndcontour("solve " + valid + " --scalar mpfr --precision 99999999999"),
+                {"--precision"});
+  checkBadInput(ndcontour("solve " + valid + " --jitter 99999999999999999999999"), {"--jitter"});
+  checkBadInput(ndcontour("solve " + valid + " --out " + valid), {"--out", "not a directory"});
+
+  // The depth must fit the packed cell index: n * depth <= 64.
+  const fs::path r8 = problemsDir() / "circle-r8.toml";
+  checkBadInput(ndcontour("solve " + quoted(r8.string()) + " --depth 9"),
+                {"--depth 9", r8.string(), "depth <= 8"});
+}
+
+TEST_CASE("cli: a valid solve parses its options and reports the missing pipeline", "[cli]") {
+  const std::string valid = quoted(writeProblem("valid.toml", kValid).string());
+  const Run run = ndcontour("solve " + valid +
+                            " --depth 5 --tolerance 1e-12 --bounding interval --subdivision "
+                            "uniform --scalar mpfr --precision 200 --classification paper "
+                            "--connection crossing --jitter 7 --out " +
+                            quoted((scratch() / "out").string()) + " --json");
+  INFO(run.err);
+  CHECK(run.status == 3);
+  CHECK(run.out.empty());
+  CHECK(run.err == "ndcontour: solve is not available yet (pipeline issue #3)\n");
+  CHECK(ndcontour("solve " + valid).status == 3);
+  CHECK(ndcontour("solve " + valid + " --precision 53").status == 3);
+}
