@@ -1,0 +1,492 @@
+// The subdivision stage (ZeroSetSubdiv, Alg. 1 step (1)) with both bounding strategies and both
+// subdivision strategies, against manifolds whose points are known in closed form.
+#include <catch2/catch.hpp>
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <random>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "problem.hpp"
+#include "strategies/bounding/bounding.hpp"
+#include "strategies/subdivision/subdivision.hpp"
+#include "test_support.hpp"
+
+namespace {
+
+using ndc::CellKey;
+using ndc::Grid;
+using ndc::Problem;
+using ndc::SolutionCells;
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// A test manifold: its problem and a sampler of points exactly on it (up to double rounding).
+struct Manifold {
+  std::string name;
+  Problem problem;
+  std::function<std::vector<double>(std::mt19937&)> sample;
+};
+
+std::string tomlProblem(const std::string& name, int n, const std::vector<double>& lo,
+                        const std::vector<double>& hi, const std::vector<std::string>& equations) {
+  std::ostringstream s;
+  s.precision(17);
+  s << "name = \"" << name << "\"\nvariables = [";
+  for (int j = 0; j < n; ++j) s << (j ? ", " : "") << "\"x" << j << "\"";
+  s << "]\ndomain = [";
+  for (int j = 0; j < n; ++j) s << (j ? ", " : "") << "[" << lo[j] << ", " << hi[j] << "]";
+  s << "]\nequations = [";
+  for (std::size_t i = 0; i < equations.size(); ++i)
+    s << (i ? ", " : "") << "\"" << equations[i] << "\"";
+  s << "]\n";
+  return s.str();
+}
+
+double angle(std::mt19937& rng) { return std::uniform_real_distribution<double>(0, 2 * kPi)(rng); }
+
+/// The unit circle in R^2 on an asymmetric domain (so no grid line is a symmetry axis).
+Manifold circle2() {
+  return {
+      "circle2",
+      ndc::parseProblem(tomlProblem("circle2", 2, {-1.25, -1.5}, {1.5, 1.375}, {"x0^2 + x1^2 - 1"}),
+                        "circle2"),
+      [](std::mt19937& rng) {
+        const double t = angle(rng);
+        return std::vector<double>{std::cos(t), std::sin(t)};
+      }};
+}
+
+/// The unit sphere of R^n cut by the affine hyperplanes `a_i . x = d_i` (integer a_i, dyadic
+/// d_i, so the problem text is exact): a circle with center c = A^T (A A^T)^-1 d in the plane
+/// spanned by an orthonormal basis u, v of ker A, radius sqrt(1 - |c|^2).
+Manifold sphereCut(const std::string& name, int n, const std::vector<std::vector<int>>& a,
+                   const std::vector<double>& d, double lo, double hi) {
+  const int planes = static_cast<int>(a.size());
+  std::vector<std::string> equations;
+  std::string sphere;
+  for (int j = 0; j < n; ++j) sphere += (j ? " + x" : "x") + std::to_string(j) + "^2";
+  equations.push_back(sphere + " - 1");
+  Eigen::MatrixXd A(planes, n);
+  Eigen::VectorXd D(planes);
+  for (int i = 0; i < planes; ++i) {
+    std::ostringstream e;
+    e.precision(17);
+    for (int j = 0; j < n; ++j) {
+      A(i, j) = a[i][j];
+      if (a[i][j] != 0) e << (a[i][j] < 0 ? " - " : " + ") << std::abs(a[i][j]) << "*x" << j;
+    }
+    D(i) = d[i];
+    e << " - " << d[i];
+    equations.push_back(e.str());
+  }
+  const Eigen::VectorXd c = A.transpose() * (A * A.transpose()).ldlt().solve(D);
+  const Eigen::MatrixXd kernel = Eigen::FullPivLU<Eigen::MatrixXd>(A).kernel();
+  REQUIRE(kernel.cols() == 2);
+  const Eigen::MatrixXd q = Eigen::HouseholderQR<Eigen::MatrixXd>(kernel).householderQ() *
+                            Eigen::MatrixXd::Identity(n, 2);
+  REQUIRE(c.norm() < 0.95);
+  const double r = std::sqrt(1 - c.squaredNorm());
+  std::vector<double> vlo(n, lo), vhi(n, hi);
+  return {name, ndc::parseProblem(tomlProblem(name, n, vlo, vhi, equations), name),
+          [c, q, r, n](std::mt19937& rng) {
+            const double t = angle(rng);
+            const Eigen::VectorXd p = c + r * (std::cos(t) * q.col(0) + std::sin(t) * q.col(1));
+            return std::vector<double>(p.data(), p.data() + n);
+          }};
+}
+
+Manifold circle3() { return sphereCut("circle3", 3, {{1, 1, 1}}, {0.5}, -1.25, 1.25); }
+
+Manifold circle6() {
+  return sphereCut(
+      "circle6", 6,
+      {{1, 1, 1, 1, 1, 1}, {1, -1, 2, 0, -1, 1}, {0, 1, -1, 2, 1, -2}, {2, 0, 1, -1, 0, 1}},
+      {0.25, 0, 0.125, -0.25}, -1.125, 1.125);
+}
+
+Manifold circle8() {
+  return sphereCut("circle8", 8,
+                   {{1, 1, 1, 1, 1, 1, 1, 1},
+                    {1, -1, 2, 0, -1, 1, 0, 1},
+                    {0, 1, -1, 2, 1, -2, 1, 0},
+                    {2, 0, 1, -1, 0, 1, -1, 1},
+                    {1, 2, 0, 0, -1, -1, 2, -2},
+                    {0, 0, 1, 1, 2, -1, -1, 1}},
+                   {0.25, 0, 0.125, -0.25, 0.125, 0}, -1.125, 1.125);
+}
+
+/// The torus R = 1, r = 0.4: (x^2+y^2+z^2+0.84)^2 - 4(x^2+y^2) = 0.
+Manifold torus() {
+  return {"torus",
+          ndc::parseProblem(tomlProblem("torus", 3, {-1.5, -1.5, -0.5}, {1.5, 1.5, 0.5},
+                                        {"(x0^2 + x1^2 + x2^2 + 0.84)^2 - 4*(x0^2 + x1^2)"}),
+                            "torus"),
+          [](std::mt19937& rng) {
+            const double u = angle(rng), v = angle(rng);
+            const double rho = 1 + 0.4 * std::cos(v);
+            return std::vector<double>{rho * std::cos(u), rho * std::sin(u), 0.4 * std::sin(v)};
+          }};
+}
+
+/// The Clifford torus in R^4: x^2 + y^2 = z^2 + w^2 = 1/2.
+Manifold clifford() {
+  return {"clifford",
+          ndc::parseProblem(
+              tomlProblem("clifford", 4, std::vector<double>(4, -1), std::vector<double>(4, 1),
+                          {"x0^2 + x1^2 - 0.5", "x2^2 + x3^2 - 0.5"}),
+              "clifford"),
+          [](std::mt19937& rng) {
+            const double u = angle(rng), v = angle(rng), s = std::sqrt(0.5);
+            return std::vector<double>{s * std::cos(u), s * std::sin(u), s * std::cos(v),
+                                       s * std::sin(v)};
+          }};
+}
+
+template <class S>
+SolutionCells solve(const Problem& problem, const char* bounding, const char* subdivision,
+                    int depth, const ndc::Progress& progress = {}) {
+  const ndc::Box<S> domain = problem.domainAs<S>();
+  const Grid grid{problem.n(), depth, problem.domain};
+  const ndc::Bounding<S> b = ndc::createBounding<S>(bounding, problem, domain);
+  return ndc::subdivide<S>(b, ndc::createSubdivision(subdivision), grid, progress);
+}
+
+std::set<CellKey> keys(const SolutionCells& cells) {
+  std::set<CellKey> out;
+  for (const auto& [key, number] : cells.lookup) out.insert(key);
+  return out;
+}
+
+/// Keys of every grid cell whose closed box contains p (several when p lies on a face).
+std::vector<CellKey> containingCells(const Grid& grid, const std::vector<double>& p) {
+  std::vector<std::vector<std::int32_t>> axes(grid.n);
+  for (int j = 0; j < grid.n; ++j) {
+    const auto i0 =
+        static_cast<std::int32_t>(std::floor((p[j] - grid.domain.lo[j]) / grid.cellWidth(j)));
+    for (std::int32_t i = i0 - 1; i <= i0 + 1; ++i)
+      if (i >= 0 && i < grid.cellsPerAxis() && grid.cellLower(j, i) <= p[j] &&
+          p[j] <= grid.cellLower(j, i + 1))
+        axes[j].push_back(i);
+  }
+  std::vector<CellKey> out;
+  std::vector<std::int32_t> index(grid.n);
+  std::function<void(int)> product = [&](int j) {
+    if (j == grid.n) {
+      out.push_back(grid.pack(index));
+      return;
+    }
+    for (std::int32_t i : axes[j]) {
+      index[j] = i;
+      product(j + 1);
+    }
+  };
+  product(0);
+  return out;
+}
+
+/// Cells hit by `samples` points of the manifold: a lower bound of the true cells.
+std::set<CellKey> sampledCells(const Manifold& m, const Grid& grid, int samples) {
+  std::mt19937 rng(7);
+  std::set<CellKey> out;
+  for (int s = 0; s < samples; ++s)
+    for (CellKey key : containingCells(grid, m.sample(rng))) out.insert(key);
+  return out;
+}
+
+/// Every sampled point of the manifold lies in solution cells only (conservativeness).
+void checkConservative(const Manifold& m, const SolutionCells& cells, int samples) {
+  std::mt19937 rng(2024);
+  int missed = 0;
+  for (int s = 0; s < samples; ++s) {
+    const std::vector<double> p = m.sample(rng);
+    for (CellKey key : containingCells(cells.grid, p))
+      if (!cells.lookup.count(key)) ++missed;
+  }
+  CHECK(missed == 0);
+}
+
+/// Depths at which the generic tests run each manifold (kept small for Mpfr).
+/// `loose` bounds the ratio of solution cells to the cells dense samples hit: the bounding
+/// tests each F_i on its own, so in high codimension many boxes meet every zero set F_i = 0 but
+/// not their intersection (circle6 at depth 3: about 60 times the true cells).
+struct Case {
+  Manifold manifold;
+  int depth;
+  double loose = 4;
+};
+
+template <class S>
+std::vector<Case> cases() {
+  // Mpfr is 10 to 50 times slower: one level less where it costs.
+  const int less = std::is_same_v<S, double> ? 0 : 1;
+  return {{circle2(), 6},
+          {circle3(), 5},
+          {torus(), 5 - less},
+          {clifford(), 4},
+          {circle6(), 3 - less, 100}};
+}
+
+}  // namespace
+
+TEMPLATE_TEST_CASE("subdivision keeps every cell the manifold meets", "[subdivision]",
+                   NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  for (const Case& c : cases<TestType>()) {
+    for (const char* bounding : {"bernstein", "interval"}) {
+      DYNAMIC_SECTION(c.manifold.name << " " << bounding) {
+        const SolutionCells cells =
+            solve<TestType>(c.manifold.problem, bounding, "binary", c.depth);
+        CHECK(cells.grid.n == c.manifold.problem.n());
+        CHECK(cells.grid.depth == c.depth);
+        checkConservative(c.manifold, cells, 2000);
+        // Not uselessly loose either: a bounded multiple of the cells dense samples hit.
+        const std::size_t hit = sampledCells(c.manifold, cells.grid, 20000).size();
+        INFO("solution cells " << cells.size() << ", cells hit by samples " << hit << ", visited "
+                               << cells.visited);
+        CHECK(cells.size() >= hit);
+        CHECK(double(cells.size()) <= c.loose * double(hit));
+      }
+    }
+  }
+}
+
+TEMPLATE_TEST_CASE("uniform and binary subdivision give the same solution cells", "[subdivision]",
+                   NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  for (const Case& c : cases<TestType>()) {
+    for (const char* bounding : {"bernstein", "interval"}) {
+      DYNAMIC_SECTION(c.manifold.name << " " << bounding) {
+        const SolutionCells uniform =
+            solve<TestType>(c.manifold.problem, bounding, "uniform", c.depth);
+        const SolutionCells binary =
+            solve<TestType>(c.manifold.problem, bounding, "binary", c.depth);
+        const int n = c.manifold.problem.n();
+        INFO("cells " << uniform.size() << ", visited: uniform " << uniform.visited << ", binary "
+                      << binary.visited);
+        // Both bound the root and the final depth; binary also bounds every box in between, so
+        // it can only discard more. For the Bernstein hull (a sub-box's coefficients are convex
+        // combinations of its parent's) and the interval enclosures here they agree exactly.
+        CHECK(keys(uniform) == keys(binary));
+        // Uniform bounds the 2^n descendants of every surviving box of a round, binary the 2
+        // children of every surviving box.
+        CHECK((uniform.visited - 1) % (std::int64_t{1} << n) == 0);
+        CHECK((binary.visited - 1) % 2 == 0);
+        CHECK(static_cast<std::int64_t>(uniform.size()) <= uniform.visited);
+        CHECK(static_cast<std::int64_t>(binary.size()) <= binary.visited);
+      }
+    }
+  }
+}
+
+TEMPLATE_TEST_CASE("bernstein and interval bounding are both supersets of the true cells",
+                   "[subdivision]", NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  for (const Case& c : cases<TestType>()) {
+    DYNAMIC_SECTION(c.manifold.name) {
+      const SolutionCells bernstein =
+          solve<TestType>(c.manifold.problem, "bernstein", "binary", c.depth);
+      const SolutionCells interval =
+          solve<TestType>(c.manifold.problem, "interval", "binary", c.depth);
+      const std::set<CellKey> hit = sampledCells(c.manifold, bernstein.grid, 20000);
+      const std::set<CellKey> b = keys(bernstein), i = keys(interval);
+      INFO("cells hit by samples " << hit.size() << ", bernstein " << b.size() << " (visited "
+                                   << bernstein.visited << "), interval " << i.size()
+                                   << " (visited " << interval.visited << ")");
+      CHECK(std::includes(b.begin(), b.end(), hit.begin(), hit.end()));
+      CHECK(std::includes(i.begin(), i.end(), hit.begin(), hit.end()));
+    }
+  }
+}
+
+TEMPLATE_TEST_CASE("no zeros in the domain gives no solution cells", "[subdivision]", NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  // x^2 + y^2 + 1 has no real zero; the unit circle misses [1.25, 2] x [0.5, 2]; the unit sphere
+  // and the plane x + y + z = 2.5 (distance 1.44 from the origin) both cross the domain but
+  // have no common zero.
+  const std::vector<Problem> problems{
+      ndc::parseProblem(tomlProblem("none", 2, {-1, -1}, {1, 1}, {"x0^2 + x1^2 + 1"}), "none"),
+      ndc::parseProblem(tomlProblem("outside", 2, {1.25, 0.5}, {2, 2}, {"x0^2 + x1^2 - 1"}),
+                        "outside"),
+      ndc::parseProblem(tomlProblem("apart", 3, {-1.25, -1.25, -1.25}, {1.25, 1.25, 1.25},
+                                    {"x0^2 + x1^2 + x2^2 - 1", "x0 + x1 + x2 - 2.5"}),
+                        "apart")};
+  for (const Problem& p : problems) {
+    for (const char* bounding : {"bernstein", "interval"}) {
+      for (const char* subdivision : {"uniform", "binary"}) {
+        DYNAMIC_SECTION(p.name << " " << bounding << " " << subdivision) {
+          const SolutionCells cells = solve<TestType>(p, bounding, subdivision, 5);
+          CHECK(cells.size() == 0);
+          CHECK(cells.lookup.empty());
+          CHECK(cells.visited >= 1);
+          // The root is discarded where the enclosure on the domain is tight enough (the
+          // Bernstein hull of x^2 + y^2 + 1 on [-1, 1]^2 is [-1, 3]).
+          if (p.name == "outside" || (p.name == "none" && std::string(bounding) == "interval"))
+            CHECK(cells.visited == 1);
+        }
+      }
+    }
+  }
+}
+
+TEMPLATE_TEST_CASE("solution cells scale like 2^(k L)", "[subdivision]", NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  const bool mpfr = !std::is_same_v<TestType, double>;
+  struct Scaling {
+    Manifold manifold;
+    int k, from, to;
+  };
+  // From depth 4 on: coarser grids are dominated by the overestimation of the bounds (interval
+  // keeps all 512 cells of the torus at depth 3).
+  const std::vector<Scaling> scalings{{circle2(), 1, 4, mpfr ? 7 : 9},
+                                      {torus(), 2, 4, mpfr ? 5 : 6}};
+  for (const Scaling& s : scalings) {
+    for (const char* bounding : {"bernstein", "interval"}) {
+      DYNAMIC_SECTION(s.manifold.name << " " << bounding) {
+        std::size_t previous = 0;
+        for (int depth = s.from; depth <= s.to; ++depth) {
+          const std::size_t count =
+              solve<TestType>(s.manifold.problem, bounding, "binary", depth).size();
+          INFO("depth " << depth << ": " << count << " cells, previous " << previous);
+          CHECK(count > 0);
+          if (previous) {
+            const double ratio = double(count) / double(previous), expected = std::ldexp(1.0, s.k);
+            CHECK(ratio >= 0.7 * expected);
+            CHECK(ratio <= 1.3 * expected);
+          }
+          previous = count;
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("double and mpfr give the same solution cells", "[subdivision][mpfr]") {
+  ndc::test::PrecisionScope<ndc::Mpfr> scope(128);
+  for (const Case& c : {Case{circle2(), 7}, Case{torus(), 4}, Case{clifford(), 4}}) {
+    for (const char* bounding : {"bernstein", "interval"}) {
+      for (const char* subdivision : {"uniform", "binary"}) {
+        DYNAMIC_SECTION(c.manifold.name << " " << bounding << " " << subdivision) {
+          const SolutionCells d = solve<double>(c.manifold.problem, bounding, subdivision, c.depth);
+          const SolutionCells m =
+              solve<ndc::Mpfr>(c.manifold.problem, bounding, subdivision, c.depth);
+          CHECK(keys(d) == keys(m));
+          CHECK(d.visited == m.visited);
+        }
+      }
+    }
+  }
+}
+
+TEMPLATE_TEST_CASE("subdivision edge cases", "[subdivision]", NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  const Manifold circle = circle2();
+  SECTION("depth 0 is the root cell") {
+    const SolutionCells cells = solve<TestType>(circle.problem, "bernstein", "binary", 0);
+    REQUIRE(cells.size() == 1);
+    CHECK(cells.cell(0)[0] == 0);
+    CHECK(cells.cell(0)[1] == 0);
+    CHECK(cells.visited == 1);
+  }
+  SECTION("cells are numbered consistently") {
+    const SolutionCells cells = solve<TestType>(circle.problem, "bernstein", "uniform", 4);
+    REQUIRE(cells.size() > 0);
+    CHECK(cells.lookup.size() == cells.size());
+    for (std::size_t c = 0; c < cells.size(); ++c) {
+      CHECK(cells.lookup.at(cells.grid.pack(cells.cell(c))) == static_cast<std::int32_t>(c));
+      for (std::int32_t i : cells.cell(c)) CHECK((i >= 0 && i < 16));
+    }
+  }
+  SECTION("progress reports a growing share, at most about 100 times, ending at 1") {
+    std::vector<double> fractions;
+    const ndc::Progress progress = [&](const char* stage, double fraction) {
+      CHECK(std::string(stage) == "subdivision");
+      fractions.push_back(fraction);
+    };
+    solve<TestType>(circle.problem, "bernstein", "binary", 8, progress);
+    REQUIRE(!fractions.empty());
+    CHECK(fractions.size() <= 101);
+    CHECK(std::is_sorted(fractions.begin(), fractions.end()));
+    CHECK(fractions.front() >= 0.0);
+    CHECK(fractions.back() == 1.0);
+  }
+  SECTION("a grid beyond a CellKey is an input error") {
+    const ndc::Box<TestType> domain = circle.problem.domainAs<TestType>();
+    const auto bounding = ndc::createBounding<TestType>("bernstein", circle.problem, domain);
+    CHECK_THROWS_AS(ndc::subdivide<TestType>(bounding, ndc::UniformSubdivision{},
+                                             Grid{2, 31, circle.problem.domain}),
+                    ndc::InputError);
+    const Problem five = ndc::parseProblem(
+        tomlProblem("five", 5, std::vector<double>(5, -1), std::vector<double>(5, 1),
+                    {"x0^2 + x1^2 + x2^2 + x3^2 + x4^2 - 1"}),
+        "five");
+    const auto b5 = ndc::createBounding<TestType>("interval", five, five.domainAs<TestType>());
+    CHECK_THROWS_AS(
+        ndc::subdivide<TestType>(b5, ndc::BinarySubdivision{}, Grid{5, 13, five.domain}),
+        ndc::InputError);
+  }
+}
+
+TEST_CASE("unknown strategy names are input errors", "[subdivision]") {
+  const Manifold circle = circle2();
+  const ndc::Box<double> domain = circle.problem.domainAs<double>();
+  CHECK_THROWS_AS(ndc::createBounding<double>("bernstien", circle.problem, domain),
+                  ndc::InputError);
+  CHECK_THROWS_WITH(ndc::createBounding<double>("x", circle.problem, domain),
+                    "unknown bounding 'x' (expected bernstein or interval)");
+  CHECK_THROWS_AS(ndc::createSubdivision("octree"), ndc::InputError);
+  CHECK_THROWS_WITH(ndc::createSubdivision("x"),
+                    "unknown subdivision 'x' (expected uniform or binary)");
+  for (std::string_view name : ndc::kBoundingNames)
+    CHECK_NOTHROW(ndc::createBounding<double>(name, circle.problem, domain));
+  for (std::string_view name : ndc::kSubdivisionNames) CHECK_NOTHROW(ndc::createSubdivision(name));
+  CHECK(std::holds_alternative<ndc::UniformSubdivision>(ndc::createSubdivision("uniform")));
+  CHECK(std::holds_alternative<ndc::BinarySubdivision>(ndc::createSubdivision("binary")));
+}
+
+TEST_CASE("deeper subdivisions stay conservative and strategy-independent", "[subdivision][slow]") {
+  for (const Case& c : {Case{torus(), 7}, Case{clifford(), 6}, Case{circle6(), 5, 200}}) {
+    DYNAMIC_SECTION(c.manifold.name << " depth " << c.depth) {
+      const SolutionCells binary =
+          solve<double>(c.manifold.problem, "bernstein", "binary", c.depth);
+      const SolutionCells uniform =
+          solve<double>(c.manifold.problem, "bernstein", "uniform", c.depth);
+      INFO("cells " << binary.size() << ", visited: binary " << binary.visited << ", uniform "
+                    << uniform.visited);
+      checkConservative(c.manifold, binary, 20000);
+      CHECK(keys(binary) == keys(uniform));
+    }
+  }
+}
+
+// Timings for the report (hidden: run with ./ndcontour_tests "[subdivision-timing]").
+TEST_CASE("subdivision timings", "[.][subdivision-timing]") {
+  struct Timing {
+    Manifold manifold;
+    int depth;
+  };
+  // circle8 beyond depth 3 takes minutes: the per-equation hulls keep ~45000 cells at depth 3.
+  for (const Timing& t :
+       {Timing{torus(), 6}, Timing{clifford(), 6}, Timing{circle6(), 6}, Timing{circle8(), 3}}) {
+    for (const char* bounding : {"bernstein", "interval"}) {
+      for (const char* subdivision : {"binary", "uniform"}) {
+        const auto start = std::chrono::steady_clock::now();
+        const SolutionCells cells =
+            solve<double>(t.manifold.problem, bounding, subdivision, t.depth);
+        const double seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        std::printf("%-9s L=%d %-9s %-7s double: %8zu cells %10lld visited %8.3f s\n",
+                    t.manifold.name.c_str(), t.depth, bounding, subdivision, cells.size(),
+                    static_cast<long long>(cells.visited), seconds);
+      }
+    }
+  }
+}
