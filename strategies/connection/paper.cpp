@@ -59,11 +59,12 @@ class PaperBuilder {
       if (consumed_[d] || !open(vertexOf_[d])) continue;
       bridge(d);
     }
-    // Second pass (beyond the paper): a cell deleted from D by a cluster that could not
-    // close it (its partner lay outside that cluster) gets a cluster of its own.
+    // Second pass (beyond the paper, k = 1): a cell of D still open (deleted from D by a
+    // cluster that could not close it, or whose partner lies more than n - 1 abnormal layers
+    // away) gets a cluster of its own, n layers deeper.
     if (k_ == 1)
       for (std::int32_t d : dangling)
-        if (open(vertexOf_[d])) bridge(d);
+        if (open(vertexOf_[d])) bridge(d, n_);
     compact();
     return std::move(out_);
   }
@@ -200,12 +201,12 @@ class PaperBuilder {
 
   /// Alg. 1: the cluster N of d, its projected centroid, the tangent space there, and the
   /// polyline (k = 1) or fan (k = 2) through the cluster's dangling points and the centroid.
-  void bridge(std::int32_t d) {
+  void bridge(std::int32_t d, int deeper = 0) {
     const int id = clusters_++;
     // Alg. 1: N <- face-adjacent normal and abnormal cubes at d, then recursively through
     // abnormal cubes, up to n - 1 layers. Failed cells are traversed like abnormal ones but
     // have no point.
-    const int layers = n_ - 1 + options_.extraLayers;
+    const int layers = n_ - 1 + options_.extraLayers + deeper;
     std::vector<std::pair<std::int32_t, int>> queue{{d, 0}};
     mark_[d] = id;
     for (std::size_t head = 0; head < queue.size(); ++head) {
