@@ -1,11 +1,11 @@
 #include "io.hpp"
 
+#include <unistd.h>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 
 #include "problem.hpp"
 
@@ -77,13 +77,13 @@ std::string toJson(const Summary& s) {
     << ", \"triangles\": " << m.triangles << ", \"components\": " << m.components
     << ", \"boundary_edges\": " << m.boundaryEdges
     << ", \"nonmanifold_edges\": " << m.nonmanifoldEdges
-    << ", \"euler_characteristic\": " << m.eulerCharacteristic
-    << ", \"open_ends\": " << m.openEnds << ", \"branch_vertices\": " << m.branchVertices
-    << "},\n";
+    << ", \"euler_characteristic\": " << m.eulerCharacteristic << ", \"open_ends\": " << m.openEnds
+    << ", \"branch_vertices\": " << m.branchVertices << "},\n";
   o << "  \"accuracy\": {\"max_residual\": " << number(m.maxResidual)
     << ", \"max_chord_error\": " << number(m.maxChordError) << "},\n";
   o << "  \"diagnostics\": {\"ambiguous_cells\": " << s.ambiguousCells
-    << ", \"singular_cells\": " << s.singularCells << "},\n";
+    << ", \"singular_cells\": " << s.singularCells << ", \"chord_failures\": " << m.chordFailures
+    << "},\n";
   o << "  \"timing_s\": {\"subdivision\": " << number(s.tSubdivision)
     << ", \"projection\": " << number(s.tProjection)
     << ", \"connection\": " << number(s.tConnection) << ", \"analysis\": " << number(s.tAnalysis)

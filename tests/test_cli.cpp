@@ -246,17 +246,34 @@ TEST_CASE("cli: usage errors exit 2 with one line", "[cli]") {
                 {"--depth 9", r8.string(), "depth <= 8"});
 }
 
-TEST_CASE("cli: a valid solve parses its options and reports the missing pipeline", "[cli]") {
+TEST_CASE("cli: a valid solve runs the pipeline and writes its outputs", "[cli]") {
   const std::string valid = quoted(writeProblem("valid.toml", kValid).string());
+  const fs::path out = scratch() / "out";
+  fs::remove_all(out);
   const Run run = ndcontour("solve " + valid +
-                            " --depth 5 --tolerance 1e-12 --bounding interval --subdivision "
+                            " --depth 5 --bounding interval --subdivision "
                             "uniform --scalar mpfr --precision 200 --classification paper "
-                            "--connection crossing --jitter 7 --out " +
-                            quoted((scratch() / "out").string()) + " --json");
+                            "--connection paper --out " +
+                            quoted(out.string()) + " --json");
   INFO(run.err);
-  CHECK(run.status == 3);
-  CHECK(run.out.empty());
-  CHECK(run.err == "ndcontour: solve is not available yet (pipeline issue #3)\n");
-  CHECK(ndcontour("solve " + valid).status == 3);
-  CHECK(ndcontour("solve " + valid + " --precision 53").status == 3);
+  CHECK(run.status == 0);
+  CHECK(run.err.empty());
+  // --json: the summary and nothing else on standard output, with the contract's fields.
+  CHECK(run.out.rfind("{", 0) == 0);
+  for (const char* field :
+       {"\"schema\": \"ndcontour.summary/1\"", "\"problem\": \"p\"", "\"n\": 2", "\"k\": 1",
+        "\"depth\": 5", "\"bounding\": \"interval\"", "\"subdivision\": \"uniform\"",
+        "\"scalar\": \"mpfr\"", "\"precision_bits\": 201", "\"connection\": \"paper\"",
+        "\"jitter\": null", "\"components\": 1", "\"open_ends\": 0", "\"max_residual\"",
+        "\"ambiguous_cells\"", "\"total\""}) {
+    CHECK(contains(run.out, field));
+  }
+  CHECK(fs::exists(out / "summary.json"));
+  CHECK(fs::exists(out / "mesh.ply"));
+  CHECK(fs::exists(out / "cells.csv"));
+  // --tolerance picks the depth: cells of width 4/2^L <= 0.1 first at L = 6.
+  const Run tolerance = ndcontour("solve " + valid + " --tolerance 0.1 --json");
+  CHECK(tolerance.status == 0);
+  CHECK(contains(tolerance.out, "\"depth\": 6"));
+  checkBadInput(ndcontour("solve " + valid + " --tolerance 0.1 --depth 3"), {"--depth"});
 }

@@ -15,7 +15,6 @@ namespace {
 /// Exit statuses of the tool.
 constexpr int kExitInternal = 1;
 constexpr int kExitBadInput = 2;
-constexpr int kExitNotAvailable = 3;
 
 std::string oneLine(std::string text) {
   for (char& c : text)
@@ -64,8 +63,7 @@ int run(int argc, char** argv) {
   ndc::cli::validateSolveOptions(solveOptions);
   const ndc::Problem problem = ndc::loadProblem(solveOptions.problemPath);
   ndc::cli::validateSolveOptions(solveOptions, problem);
-  std::cerr << "ndcontour: solve is not available yet (pipeline issue #3)\n";
-  return kExitNotAvailable;
+  return ndc::cli::runSolve(solveOptions, problem);
 }
 
 }  // namespace

@@ -53,11 +53,15 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
   solve.add_option("problem", o.problemPath, "Problem file (TOML, design.md 4.1)")
       ->required()
       ->type_name("PROBLEM.toml");
-  solve.add_option("--depth", s.depth, "Subdivision depth L: 2^L cells per axis")
-      ->type_name("L")
-      ->capture_default_str();
-  solve.add_option("--tolerance", o.tolerance, "Newton tolerance h (default: from the scalar)")
-      ->type_name("h");
+  CLI::Option* depth =
+      solve.add_option("--depth", s.depth, "Subdivision depth L: 2^L cells per axis")
+          ->type_name("L")
+          ->capture_default_str();
+  solve
+      .add_option("--tolerance", o.tolerance,
+                  "Cell size h: the smallest depth whose cells are no wider than h")
+      ->type_name("h")
+      ->excludes(depth);
   solve.add_option("--bounding", s.bounding, "Bounding strategy")
       ->type_name(joined(kBoundingNames))
       ->capture_default_str();

@@ -1,0 +1,170 @@
+#include "pipeline.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <random>
+#include <variant>
+
+#include "analysis.hpp"
+#include "grid.hpp"
+#include "scalar.hpp"
+#include "strategies/bounding/bounding.hpp"
+#include "strategies/classification/classification.hpp"
+#include "strategies/connection/connection.hpp"
+#include "strategies/projection/newton.hpp"
+#include "strategies/subdivision/subdivision.hpp"
+#include "system.hpp"
+
+namespace ndc {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// The grid of the run: the problem domain, shifted by a seeded sub-cell offset when
+/// `--jitter` is given (so M avoids the lower-dimensional faces of the grid).
+Grid makeGrid(const Problem& problem, const Settings& settings) {
+  Grid grid;
+  grid.n = problem.n();
+  grid.depth = settings.depth;
+  grid.domain = problem.domain;
+  if (settings.jitter) {
+    std::mt19937_64 rng(*settings.jitter);
+    std::uniform_real_distribution<double> offset(0.05, 0.45);
+    for (int j = 0; j < grid.n; ++j) {
+      const double shift = offset(rng) * grid.cellWidth(j);
+      grid.domain.lo[j] -= shift;
+      grid.domain.hi[j] -= shift;
+    }
+  }
+  return grid;
+}
+
+template <class S>
+Box<S> toScalarBox(const Box<double>& box) {
+  Box<S> out;
+  for (int j = 0; j < box.dim(); ++j) {
+    out.lo.push_back(S(box.lo[j]));
+    out.hi.push_back(S(box.hi[j]));
+  }
+  return out;
+}
+
+template <class S>
+RunResult run(const Problem& problem, const Settings& settings, const Progress& progress) {
+  const auto start = Clock::now();
+  RunResult result;
+  result.n = problem.n();
+  result.k = problem.k();
+  Summary& summary = result.summary;
+  summary.problem = problem.name;
+  summary.n = problem.n();
+  summary.k = problem.k();
+  summary.settings = settings;
+  summary.settings.precisionBits = ScalarTraits<S>::precisionBits();
+
+  // Choose every strategy by name before any work, so a bad name costs nothing.
+  const Grid grid = makeGrid(problem, settings);
+  const Box<S> domain = toScalarBox<S>(grid.domain);
+  const System<S> system(problem);
+  const Bounding<S> bounding = createBounding<S>(settings.bounding, problem, domain);
+  const Subdivision subdivision = createSubdivision(settings.subdivision);
+  const Projection<S> projection = createProjection<S>(settings.projection, system);
+  const Classification classification = createClassification(settings.classification);
+  const Connection connection = createConnection(settings.connection);
+
+  // Alg. 1 (1): ZeroSetSubdiv: the solution cells of the final depth.
+  auto t = Clock::now();
+  const SolutionCells cells = subdivide<S>(bounding, subdivision, grid, progress);
+  summary.tSubdivision = secondsSince(t);
+  summary.visited = cells.visited;
+  summary.solution = static_cast<std::int64_t>(cells.size());
+
+  // Alg. 1: project each cell's centroid onto M, then classify the cell.
+  t = Clock::now();
+  const Projections<S> projections = projectCells<S>(projection, cells, domain, progress);
+  const std::vector<CellClass> classes =
+      classifyCells<S>(classification, cells, domain, projections);
+  summary.tProjection = secondsSince(t);
+  for (CellClass c : classes) {
+    if (c == CellClass::kNormal) ++summary.normal;
+    if (c == CellClass::kAbnormal) ++summary.abnormal;
+    if (c == CellClass::kFailed) ++summary.failed;
+  }
+
+  // Alg. 1: connect the cells into a complex.
+  const Projector<S> project = makeProjector<S>(projection);
+  t = Clock::now();
+  ConnectionOutput<S> connected = connect<S>(
+      connection,
+      ConnectionInput<S>{problem, system, cells, projections, classes, project, problem.k()});
+  summary.tConnection = secondsSince(t);
+  summary.ambiguousCells = connected.ambiguousCells;
+  summary.singularCells = connected.singularCells;
+
+  // Analysis on the welded mesh.
+  t = Clock::now();
+  double diameter = 0;
+  for (int j = 0; j < problem.n(); ++j) diameter = std::max(diameter, grid.domain.width(j));
+  const Complex<S> welded = weld<S>(connected.complex, 1e-9 * diameter);
+  summary.mesh = analyse<S>(welded, system, project);
+  summary.tAnalysis = secondsSince(t);
+
+  // Outputs in double.
+  for (const S& v : welded.vertices) result.vertices.push_back(toDouble(v));
+  result.simplices = welded.simplices;
+  result.cellIndex = cells.index;
+  result.cellClass = classes;
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    const Box<S> box = cellBox(grid, domain, cells.cell(c));
+    for (int j = 0; j < problem.n(); ++j) {
+      result.cellCentre.push_back(toDouble(S((box.lo[j] + box.hi[j]) / 2)));
+      result.cellPoint.push_back(toDouble(projections.at(c)[j]));
+    }
+  }
+  summary.tTotal = secondsSince(start);
+  return result;
+}
+
+}  // namespace
+
+int depthForTolerance(const Problem& problem, double tolerance) {
+  if (!(tolerance > 0) || !std::isfinite(tolerance)) {
+    throw InputError("tolerance must be a positive number");
+  }
+  double widest = 0;
+  for (int j = 0; j < problem.n(); ++j) widest = std::max(widest, problem.domain.width(j));
+  int depth = 0;
+  while (widest / std::ldexp(1.0, depth) > tolerance) {
+    if (++depth > 30) throw InputError("tolerance too small: it needs a depth beyond 30");
+  }
+  return std::max(depth, 1);
+}
+
+RunResult runPipeline(const Problem& problem, const Settings& settings, const Progress& progress) {
+  if (settings.depth < 1 || !Grid::fits(problem.n(), settings.depth)) {
+    throw InputError(problem.path + ": depth " + std::to_string(settings.depth) +
+                     " is out of range for n = " + std::to_string(problem.n()) +
+                     " (need 1 <= depth and n * depth <= 64)");
+  }
+  // A k-manifold meets about c 2^(k L) cells of the final grid: refuse depths whose cell list
+  // alone would not fit in memory rather than fail after minutes of work.
+  if (problem.k() * settings.depth > 26) {
+    throw InputError(problem.path + ": depth " + std::to_string(settings.depth) +
+                     " is beyond what memory allows for k = " + std::to_string(problem.k()) +
+                     " (about 2^" + std::to_string(problem.k() * settings.depth) +
+                     " solution cells; use k * depth <= 26)");
+  }
+  if (settings.scalar == "double") return run<double>(problem, settings, progress);
+  if (settings.scalar == "mpfr") {
+    setMpfrPrecision(settings.precisionBits);
+    return run<Mpfr>(problem, settings, progress);
+  }
+  throw InputError("unknown scalar '" + settings.scalar + "' (expected double or mpfr)");
+}
+
+}  // namespace ndc
