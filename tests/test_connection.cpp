@@ -326,7 +326,7 @@ Scene<S> circleScene(const Circles& circles, int depth) {
 TEST_CASE("createConnection names and errors", "[connection]") {
   CHECK(std::holds_alternative<PaperConnection>(createConnection("paper")));
   CHECK(std::holds_alternative<NaiveConnection>(createConnection("naive")));
-  CHECK_THROWS_WITH(createConnection("crossing"), "connection 'crossing' is not available yet");
+  CHECK(std::holds_alternative<CrossingConnection>(createConnection("crossing")));
   CHECK_THROWS_WITH(createConnection("x"),
                     "unknown connection 'x' (expected paper, naive or crossing)");
   CHECK(kConnectionNames.size() == 3);

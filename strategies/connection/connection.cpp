@@ -10,7 +10,7 @@ namespace ndc {
 Connection createConnection(std::string_view name) {
   if (name == "paper") return PaperConnection{};
   if (name == "naive") return NaiveConnection{};
-  if (name == "crossing") throw InputError("connection 'crossing' is not available yet");
+  if (name == "crossing") return CrossingConnection{};
   throw InputError("unknown connection '" + std::string(name) +
                    "' (expected paper, naive or crossing)");
 }

@@ -10,6 +10,7 @@
 
 #include "framework/scalar.hpp"
 #include "framework/strategy.hpp"
+#include "strategies/connection/crossing.hpp"
 
 namespace ndc {
 
@@ -83,15 +84,14 @@ static_assert(ConnectionStrategy<NaiveConnection, double>);
 static_assert(ConnectionStrategy<NaiveConnection, Mpfr>);
 
 /// The connection family: one closed variant, dispatched once per stage.
-/// Models: PaperConnection, NaiveConnection (CrossingConnection comes with a later issue).
-using Connection = std::variant<PaperConnection, NaiveConnection>;
+/// Models: PaperConnection, NaiveConnection, CrossingConnection
+/// (strategies/connection/crossing.hpp).
+using Connection = std::variant<PaperConnection, NaiveConnection, CrossingConnection>;
 
-/// The names createConnection recognises (the CLI's `--connection`); "crossing" is reserved
-/// and rejected with "not available yet" until CrossingConnection lands.
+/// The names createConnection recognises (the CLI's `--connection`).
 inline constexpr std::array<std::string_view, 3> kConnectionNames{"paper", "naive", "crossing"};
 
-/// Makes the connection called `name` (default options); throws InputError on an unknown
-/// or unavailable name.
+/// Makes the connection called `name` (default options); throws InputError on an unknown name.
 Connection createConnection(std::string_view name);
 
 /// Runs the connection stage (one std::visit per stage).

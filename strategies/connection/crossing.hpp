@@ -1,0 +1,25 @@
+/// \file crossing.hpp
+/// `crossing`: watertight dual contouring in any dimension (design.md 3; beyond the paper).
+#pragma once
+
+#include "strategy.hpp"
+
+namespace ndc {
+
+/// Dual contouring generalised to k-manifolds in R^n (k = 1, 2). A generic k-manifold meets a
+/// grid face of dimension m = n - k in isolated points: the roots of the square system of the
+/// constraints restricted to the face. Each crossed m-face is shared by 2^k solution cells and
+/// gives one dual k-cube on their vertices: an edge (k = 1) or a quad split into two triangles
+/// along its shorter diagonal (k = 2). The crossings on the boundary of an (m+1)-face come in
+/// pairs (the ends of the curve M ∩ face), so the result is closed mod 2, and a closed
+/// manifold wherever every cell holds one simple piece of M. See \ref crossing.
+class CrossingConnection final {
+ public:
+  /// Faces are subdivided at most this many rounds when their root is not proven unique.
+  int maxFaceDepth = 4;
+
+  template <class S>
+  ConnectionOutput<S> connect(const ConnectionInput<S>& in) const;
+};
+
+}  // namespace ndc
