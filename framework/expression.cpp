@@ -16,7 +16,9 @@
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
+#include <vector>
 
 namespace ndc {
 
@@ -39,9 +41,21 @@ std::unique_ptr<ExprNode> makeBinary(ExprNode::Kind kind, std::unique_ptr<ExprNo
   return node;
 }
 
+/// Sets a number node's literal and its cached double value and double enclosure.
+void setNumber(ExprNode& node, std::string literal) {
+  const Interval<double> enclosure = Interval<double>::fromString(literal);
+  node.value = std::strtod(literal.c_str(), nullptr);
+  node.enclosureLo = enclosure.lower();
+  node.enclosureHi = enclosure.upper();
+  node.literal = std::move(literal);
+}
+
 std::unique_ptr<ExprNode> clone(const ExprNode& n) {
   auto node = makeNode(n.kind);
   node->literal = n.literal;
+  node->value = n.value;
+  node->enclosureLo = n.enclosureLo;
+  node->enclosureHi = n.enclosureHi;
   node->variable = n.variable;
   node->exponent = n.exponent;
   if (n.left) node->left = clone(*n.left);
@@ -69,12 +83,7 @@ struct Arith;
 
 template <>
 struct Arith<double> {
-  static double number(const ExprNode& n) {
-    // Validated by the parser; from_chars rounds to nearest like strtod, without allocating.
-    double v = 0;
-    std::from_chars(n.literal.data(), n.literal.data() + n.literal.size(), v);
-    return v;
-  }
+  static double number(const ExprNode& n) { return n.value; }  // rounded at parse time
   static double constant(int k) { return k; }
   static double power(const double& a, int n) {
     // Binary powering: exact for small integers, a few roundings otherwise.
@@ -110,7 +119,14 @@ struct Arith<Mpfr> {
 template <class S>
 struct Arith<Interval<S>> {
   using T = Interval<S>;
-  static T number(const ExprNode& n) { return T::fromString(n.literal); }
+  static T number(const ExprNode& n) {
+    // Double intervals use the enclosure computed at parse time; others parse the literal.
+    if constexpr (std::is_same_v<S, double>) {
+      return T(n.enclosureLo, n.enclosureHi);
+    } else {
+      return T::fromString(n.literal);
+    }
+  }
   static T constant(int k) { return T(S(k)); }
   static T power(const T& a, int n) { return a.pow(n); }  // even-power rule: tight
   static T divide(const T& a, const T& c) {
@@ -157,8 +173,12 @@ T evalValue(const ExprNode& n, std::span<const T> x) {
 template <class T>
 class GradientEvaluator {
  public:
-  GradientEvaluator(const ExprNode& root, std::span<const T> x)
-      : x_(x), stride_(x.size() + 1), work_((height(root) + 1) * stride_, Arith<T>::constant(0)) {}
+  /// `slots` is the tree's height + 1; `work` is scratch the evaluator may resize (a reused
+  /// per-thread buffer for double, so the Newton loop does not allocate).
+  GradientEvaluator(int slots, std::span<const T> x, std::vector<T>& work)
+      : x_(x), stride_(x.size() + 1), work_(work) {
+    work_.resize(std::size_t(slots) * stride_, Arith<T>::constant(0));
+  }
 
   /// Evaluates `root` into slot 0 and returns the value; the gradient is copied to `gradient`.
   T run(const ExprNode& root, std::span<T> gradient) {
@@ -238,7 +258,7 @@ class GradientEvaluator {
 
   std::span<const T> x_;
   std::size_t stride_;
-  std::vector<T> work_;
+  std::vector<T>& work_;
 };
 
 // ---- Bernstein form -------------------------------------------------------------------------
@@ -518,7 +538,7 @@ class Parser {
     double v = std::strtod(token.c_str(), nullptr);
     if (!std::isfinite(v)) fail(start, "number out of range (not finite): '" + token + "'");
     auto node = makeNode(ExprNode::Kind::kNumber);
-    node->literal = std::move(token);
+    setNumber(*node, std::move(token));
     return node;
   }
 
@@ -561,11 +581,11 @@ void checkSize(const Expression& e, std::span<X> x, const char* what) {
 // ---- Expression --------------------------------------------------------------------------------
 
 Expression::Expression() : root_(makeNode(ExprNode::Kind::kNumber)) {
-  root_->literal = "0";
+  setNumber(*root_, "0");
   text_ = "0";
 }
 Expression::Expression(const Expression& o)
-    : dim_(o.dim_), text_(o.text_), root_(o.root_ ? clone(*o.root_) : nullptr) {}
+    : dim_(o.dim_), slots_(o.slots_), text_(o.text_), root_(o.root_ ? clone(*o.root_) : nullptr) {}
 Expression::Expression(Expression&&) noexcept = default;
 Expression& Expression::operator=(const Expression& o) {
   if (this != &o) *this = Expression(o);
@@ -579,6 +599,7 @@ Expression Expression::parse(std::string_view text, std::span<const std::string>
   e.root_ = Parser(text, variables).parse();
   e.dim_ = static_cast<int>(variables.size());
   e.text_ = std::string(text);
+  e.slots_ = height(*e.root_) + 1;
   return e;
 }
 
@@ -598,7 +619,13 @@ template <class S>
 S Expression::evaluate(std::span<const S> x, std::span<S> gradient) const {
   checkSize(*this, x, "point");
   checkSize(*this, gradient, "gradient");
-  return GradientEvaluator<S>(*root_, x).run(*root_, gradient);
+  if constexpr (std::is_same_v<S, double>) {
+    thread_local std::vector<double> work;
+    return GradientEvaluator<S>(slots_, x, work).run(*root_, gradient);
+  } else {
+    std::vector<S> work;
+    return GradientEvaluator<S>(slots_, x, work).run(*root_, gradient);
+  }
 }
 
 template <class S>
@@ -612,7 +639,8 @@ Interval<S> Expression::evaluate(std::span<const Interval<S>> x,
                                  std::span<Interval<S>> gradient) const {
   checkSize(*this, x, "box");
   checkSize(*this, gradient, "gradient");
-  return GradientEvaluator<Interval<S>>(*root_, x).run(*root_, gradient);
+  std::vector<Interval<S>> work;
+  return GradientEvaluator<Interval<S>>(slots_, x, work).run(*root_, gradient);
 }
 
 template <class S>

@@ -34,9 +34,11 @@ struct ExprNode {
   enum class Kind { kNumber, kVariable, kAdd, kSub, kMul, kDiv, kPow, kNeg };
   Kind kind;
   std::string literal;  ///< kNumber: the decimal text, kept so Mpfr parses it exactly
-  int variable = -1;    ///< kVariable: index into the variable list
-  int exponent = 0;     ///< kPow: the non-negative integer exponent
-  std::unique_ptr<ExprNode> left, right;  ///< operands (kNeg and kPow use left only)
+  double value = 0;     ///< kNumber: the literal rounded to the nearest double (cached)
+  double enclosureLo = 0, enclosureHi = 0;  ///< kNumber: a double interval holding the literal
+  int variable = -1;                        ///< kVariable: index into the variable list
+  int exponent = 0;                         ///< kPow: the non-negative integer exponent
+  std::unique_ptr<ExprNode> left, right;    ///< operands (kNeg and kPow use left only)
 };
 
 /// A parsed polynomial expression in the variables `x_0..x_{n-1}`.
@@ -84,6 +86,7 @@ class Expression {
 
  private:
   int dim_ = 0;
+  int slots_ = 1;  ///< evaluation slots the gradient evaluator needs: tree height + 1
   std::string text_;
   std::unique_ptr<ExprNode> root_;
 };

@@ -61,7 +61,7 @@ class FaceSolver {
     const bool found = newton(box, root) && inside(box, closedUpper, root);
     const Krawczyk k = krawczyk(patches);
     if (k == Krawczyk::kNone) return;
-    if (k == Krawczyk::kUnique && found) {
+    if (found && (k == Krawczyk::kUnique || krawczykAround(root, box) == Krawczyk::kUnique)) {
       roots.push_back(fullPoint(root));
       return;
     }
@@ -152,8 +152,47 @@ class FaceSolver {
   /// K = y - Y F(y) + (I - Y J(X)) (X - y). K inside int X proves one root in X;
   /// K disjoint from X proves none. J(X) comes from the Bernstein derivative hulls.
   Krawczyk krawczyk(const std::vector<Bernstein<S>>& patches) {
-    using I = Interval<S>;
+    // J(X) from the hulls of the derivative patches of the face.
     const Box<S>& box = patches.front().domain();
+    jx_.resize(std::size_t(m_) * m_);
+    for (int i = 0; i < m_; ++i) {
+      for (int j = 0; j < m_; ++j) {
+        const auto [lo, hi] = patches[i].derivative(j).coefficientRange();
+        jx_[std::size_t(i) * m_ + j] = Interval<S>(lo, hi);
+      }
+    }
+    return krawczyk(box);
+  }
+
+  /// Krawczyk on the box `root +- width` around a Newton root, with J(X) from the interval
+  /// gradient; it contains the whole current face when `width` is the face's width, so
+  /// kUnique proves the root is the face's only one even when it lies near the face boundary.
+  Krawczyk krawczykAround(const std::vector<S>& root, const Box<S>& face) {
+    using I = Interval<S>;
+    Box<S> box{root, root};
+    for (int j = 0; j < m_; ++j) {
+      const S w = face.hi[j] - face.lo[j];
+      box.lo[j] -= w;
+      box.hi[j] += w;
+    }
+    std::vector<I> x;
+    x.reserve(n_);
+    for (int j = 0; j < n_; ++j) x.emplace_back(point_[j]);
+    for (int j = 0; j < m_; ++j) x[free_[j]] = I(box.lo[j], box.hi[j]);
+    std::vector<I> gradient(n_);
+    jx_.resize(std::size_t(m_) * m_);
+    for (int i = 0; i < m_; ++i) {
+      system_.equations()[i].template evaluate<S>(std::span<const I>(x), std::span<I>(gradient));
+      for (int j = 0; j < m_; ++j) jx_[std::size_t(i) * m_ + j] = gradient[free_[j]];
+    }
+    return krawczyk(box);
+  }
+
+  /// Krawczyk operator on the box X with y = mid X, Y = J(y)^-1 and J(X) enclosed by jx_:
+  /// K = y - Y F(y) + (I - Y J(X)) (X - y). K inside int X proves one root in X;
+  /// K disjoint from X proves none.
+  Krawczyk krawczyk(const Box<S>& box) {
+    using I = Interval<S>;
     std::vector<S> y(m_);
     for (int j = 0; j < m_; ++j) y[j] = (box.lo[j] + box.hi[j]) / 2;
     std::vector<S> x = point_;
@@ -166,19 +205,13 @@ class FaceSolver {
     Eigen::FullPivLU<Matrix<S>> lu(jy);
     if (lu.rank() < m_) return Krawczyk::kUnknown;
     const Matrix<S> inverse = lu.inverse();
-    // Enclosures: F(y) by interval evaluation at the point, J(X) by derivative hulls.
+    // F(y) by interval evaluation at the point, so its rounding is enclosed.
     std::vector<I> xi;
     xi.reserve(n_);
     for (int j = 0; j < n_; ++j) xi.emplace_back(x[j]);
     std::vector<I> fy;
-    for (int i = 0; i < m_; ++i)
-      fy.push_back(system_.equations()[i].template evaluate<S>(std::span<const I>(xi)));
-    std::vector<I> jx(std::size_t(m_) * m_);
     for (int i = 0; i < m_; ++i) {
-      for (int j = 0; j < m_; ++j) {
-        const auto [lo, hi] = patches[i].derivative(j).coefficientRange();
-        jx[std::size_t(i) * m_ + j] = I(lo, hi);
-      }
+      fy.push_back(system_.equations()[i].template evaluate<S>(std::span<const I>(xi)));
     }
     bool unique = true;
     for (int i = 0; i < m_; ++i) {
@@ -186,7 +219,7 @@ class FaceSolver {
       for (int l = 0; l < m_; ++l) k -= I(inverse(i, l)) * fy[l];
       for (int j = 0; j < m_; ++j) {
         I c(S(i == j ? 1 : 0));
-        for (int l = 0; l < m_; ++l) c -= I(inverse(i, l)) * jx[std::size_t(l) * m_ + j];
+        for (int l = 0; l < m_; ++l) c -= I(inverse(i, l)) * jx_[std::size_t(l) * m_ + j];
         k += c * I(box.lo[j] - y[j], box.hi[j] - y[j]);
       }
       if (k.upper() < box.lo[i] || k.lower() > box.hi[i]) return Krawczyk::kNone;
@@ -200,6 +233,7 @@ class FaceSolver {
   std::vector<S> point_;
   std::vector<int> free_;
   std::vector<S> f_, jacobian_;
+  std::vector<Interval<S>> jx_;
   bool certain_ = true;
 };
 
@@ -373,15 +407,23 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
       quadsOf[dual.cells[i]].push_back(static_cast<std::int32_t>(&dual - duals.data()));
   }
 
-  // Ambiguous cells: the crossings do not form one simple piece.
+  // Ambiguous cells: the crossings do not form one simple piece. A cell on the domain
+  // boundary may hold a piece of M that leaves the domain: an arc with one crossing (k = 1)
+  // or a half-disk whose link is a path (k = 2).
+  const auto onDomainBoundary = [&](std::size_t c) {
+    const auto ci = cells.cell(c);
+    return std::any_of(ci.begin(), ci.end(),
+                       [&](std::int32_t i) { return i == 0 || i + 1 == top; });
+  };
   for (std::size_t c = 0; c < count; ++c) {
     if (crossingCount[c] == 0) continue;
+    const bool boundary = onDomainBoundary(c);
     if (k == 1) {
-      if (crossingCount[c] != 2) ++out.ambiguousCells;
+      if (crossingCount[c] != 2 && !(boundary && crossingCount[c] == 1)) ++out.ambiguousCells;
       continue;
     }
-    // k = 2: the link of the vertex (one edge per quad, between the quad's two cells that
-    // are face neighbours of c) must be a single cycle.
+    // k = 2: the link of the vertex has one edge per quad, between the quad's two cells that
+    // are face neighbours of c; one disk of M means the link is one cycle (or one path).
     std::unordered_map<std::int32_t, std::vector<std::int32_t>> link;
     for (std::int32_t q : quadsOf[c]) {
       const auto& cs = duals[q].cells;
@@ -391,22 +433,27 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
       link[p].push_back(r);
       link[r].push_back(p);
     }
-    bool cycle = !link.empty();
-    for (const auto& [node, adjacent] : link) cycle = cycle && adjacent.size() == 2;
-    if (cycle) {
-      // Connected: walk the cycle from one node.
-      std::size_t seen = 1;
-      std::int32_t previous = link.begin()->first, current = link.begin()->second[0];
-      while (current != link.begin()->first && seen <= link.size()) {
-        const auto& adjacent = link[current];
-        const std::int32_t next = adjacent[0] == previous ? adjacent[1] : adjacent[0];
-        previous = current;
-        current = next;
-        ++seen;
-      }
-      cycle = seen == link.size();
+    std::size_t ends = 0;
+    bool simple = !link.empty();
+    for (const auto& [node, adjacent] : link) {
+      if (adjacent.size() == 1) ++ends;
+      simple = simple && adjacent.size() <= 2;
     }
-    if (!cycle) ++out.ambiguousCells;
+    simple = simple && (ends == 0 || (boundary && ends == 2));
+    if (simple) {
+      // Connected: a search from one node reaches them all.
+      std::vector<std::int32_t> stack{link.begin()->first};
+      std::unordered_map<std::int32_t, bool> seen{{link.begin()->first, true}};
+      while (!stack.empty()) {
+        const std::int32_t node = stack.back();
+        stack.pop_back();
+        for (std::int32_t next : link[node]) {
+          if (seen.emplace(next, true).second) stack.push_back(next);
+        }
+      }
+      simple = seen.size() == link.size();
+    }
+    if (!simple) ++out.ambiguousCells;
   }
   return out;
 }
