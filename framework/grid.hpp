@@ -17,9 +17,9 @@ using CellKey = std::uint64_t;
 
 /// The uniform grid of `2^L` cells per axis on a box domain.
 struct Grid {
-  int n = 0;          ///< ambient dimension
-  int depth = 0;      ///< L
-  Box<double> domain; ///< the problem domain (jitter, if any, is already applied)
+  int n = 0;           ///< ambient dimension
+  int depth = 0;       ///< L
+  Box<double> domain;  ///< the problem domain (jitter, if any, is already applied)
 
   /// Cells per axis, 2^L.
   std::int64_t cellsPerAxis() const { return std::int64_t{1} << depth; }
@@ -43,7 +43,10 @@ Box<S> cellBox(const Grid& grid, const Box<S>& domain, std::span<const std::int3
   for (int j = 0; j < grid.n; ++j) {
     const S w = (domain.hi[j] - domain.lo[j]) / cells;
     box.lo[j] = domain.lo[j] + w * S(static_cast<double>(index[j]));
-    box.hi[j] = index[j] + 1 == grid.cellsPerAxis() ? domain.hi[j] : box.lo[j] + w;
+    // The same formula for both ends, so neighbouring cells share their face exactly.
+    box.hi[j] = index[j] + 1 == grid.cellsPerAxis()
+                    ? domain.hi[j]
+                    : domain.lo[j] + w * S(static_cast<double>(index[j] + 1));
   }
   return box;
 }
@@ -51,8 +54,8 @@ Box<S> cellBox(const Grid& grid, const Box<S>& domain, std::span<const std::int3
 /// The solution cells: final-depth boxes the subdivision could not discard.
 struct SolutionCells {
   Grid grid;
-  std::int64_t visited = 0;          ///< boxes the subdivision bounded
-  std::vector<std::int32_t> index;   ///< n ints per cell, cell c at [c n, (c+1) n)
+  std::int64_t visited = 0;                          ///< boxes the subdivision bounded
+  std::vector<std::int32_t> index;                   ///< n ints per cell, cell c at [c n, (c+1) n)
   std::unordered_map<CellKey, std::int32_t> lookup;  ///< packed index -> cell number
 
   std::size_t size() const { return grid.n ? index.size() / grid.n : 0; }

@@ -17,7 +17,7 @@ struct Settings {
   unsigned precisionBits = 53;
   std::string projection = "newton";
   std::string classification = "paper";
-  std::string connection = "paper";
+  std::string connection = "crossing";
   std::optional<std::uint64_t> jitter;
 };
 

@@ -277,3 +277,14 @@ TEST_CASE("cli: a valid solve runs the pipeline and writes its outputs", "[cli]"
   CHECK(contains(tolerance.out, "\"depth\": 6"));
   checkBadInput(ndcontour("solve " + valid + " --tolerance 0.1 --depth 3"), {"--depth"});
 }
+
+TEST_CASE("cli: bench times each stage and rejects bad settings", "[cli]") {
+  const std::string valid = quoted(writeProblem("bench.toml", kValid).string());
+  const Run run = ndcontour("bench " + valid + " --depth 4 --repeat 2 --connection crossing");
+  INFO(run.err);
+  CHECK(run.status == 0);
+  CHECK(contains(run.out, "| problem | n | k | depth |"));
+  CHECK(contains(run.out, "| p | 2 | 1 | 4 | bernstein | binary | crossing | double |"));
+  checkBadInput(ndcontour("bench " + valid + " --connection mc"), {"--connection", "mc"});
+  checkBadInput(ndcontour("bench " + valid + " --repeat 0"), {"--repeat"});
+}

@@ -2,7 +2,11 @@
 /// The subcommands of the `ndcontour` command-line tool.
 #pragma once
 
+#include <cstdint>
+#include <optional>
 #include <ostream>
+#include <string>
+#include <vector>
 
 #include "cli/solve_options.hpp"
 #include "problem.hpp"
@@ -17,5 +21,20 @@ void printInfo(const Problem& problem, std::ostream& out);
 /// mesh.ply and cells.csv into `--out DIR` and prints the summary (JSON with `--json`).
 /// Returns the exit status.
 int runSolve(SolveOptions options, const Problem& problem);
+
+/// Options of `ndcontour bench`.
+struct BenchOptions {
+  std::vector<std::string> problems;
+  Settings settings;
+  std::optional<std::uint64_t> jitter;
+  int repeat = 5;
+};
+
+/// Declares the options of the `bench` subcommand.
+void addBenchOptions(CLI::App& bench, BenchOptions& options);
+
+/// `ndcontour bench`: runs the pipeline `repeat` times on each problem and prints the median
+/// time of each stage as a Markdown table row. Returns the exit status.
+int runBench(BenchOptions options);
 
 }  // namespace ndc::cli

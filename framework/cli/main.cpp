@@ -37,6 +37,10 @@ int run(int argc, char** argv) {
   CLI::App* solve = app.add_subcommand("solve", "Contour the zero set of a problem");
   ndc::cli::addSolveOptions(*solve, solveOptions);
 
+  ndc::cli::BenchOptions benchOptions;
+  CLI::App* bench = app.add_subcommand("bench", "Time each pipeline stage on problem files");
+  ndc::cli::addBenchOptions(*bench, benchOptions);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -47,13 +51,14 @@ int run(int argc, char** argv) {
     if (app.get_subcommands().empty() && !extra.empty() && extra.front().starts_with("-"))
       message = "unknown option '" + extra.front() + "'";
     else if (app.get_subcommands().empty() && !extra.empty())
-      message = "unknown subcommand '" + extra.front() + "' (accepted: info, solve)";
+      message = "unknown subcommand '" + extra.front() + "' (accepted: info, solve, bench)";
     else if (app.get_subcommands().empty())
-      message = "a subcommand is required (accepted: info, solve)";
+      message = "a subcommand is required (accepted: info, solve, bench)";
     std::cerr << "ndcontour: " << oneLine(message) << " (see ndcontour --help)\n";
     return kExitBadInput;
   }
 
+  if (bench->parsed()) return ndc::cli::runBench(benchOptions);
   if (info->parsed()) {
     ndc::cli::printInfo(ndc::loadProblem(infoPath), std::cout);
     return 0;

@@ -45,6 +45,10 @@ class FaceSolver {
     point_ = std::move(point);
     free_ = std::move(freeAxes);
     certain_ = true;
+    if (m_ == 1) {
+      edge(patches.front().domain(), roots);
+      return true;
+    }
     recurse(patches, closedUpper, 0, roots);
     return certain_;
   }
@@ -85,6 +89,44 @@ class FaceSolver {
     closedLower[axis] = false;
     recurse(lower, closedLower, depth + 1, roots);
     recurse(upper, closedUpper, depth + 1, roots);
+  }
+
+  /// m = 1 (hypersurfaces, k = n - 1): the face is a grid edge, and the parity of its roots is
+  /// the sign change of F between its ends (sign 0 counts as +), exactly as in 3-D dual
+  /// contouring. The grid vertices are shared by all their edges, so the result is closed
+  /// whatever the roots inside do. An odd edge gets one crossing, found by safeguarded Newton.
+  void edge(const Box<S>& box, std::vector<std::vector<S>>& roots) {
+    using std::abs;
+    std::vector<S> x = point_;
+    const auto value = [&](const S& t) {
+      x[free_[0]] = t;
+      system_.evaluate(x, f_, jacobian_);
+      return f_[0];
+    };
+    S a = box.lo[0], b = box.hi[0];
+    const S fa = value(a), fb = value(b);
+    const bool negativeA = fa < 0, negativeB = fb < 0;
+    if (negativeA == negativeB) return;
+    // Keep a bracket [a, b] with the sign change; Newton steps that leave it are bisections.
+    S t = (a + b) / 2;
+    const S eps = ScalarTraits<S>::epsilon();
+    for (int iteration = 0; iteration < 200; ++iteration) {
+      const S ft = value(t);
+      if (ft == 0) break;
+      if ((ft < 0) == negativeA) {
+        a = t;
+      } else {
+        b = t;
+      }
+      const S slope = jacobian_[free_[0]];
+      S next = slope != 0 ? t - ft / slope : (a + b) / 2;
+      if (!(next > a && next < b)) next = (a + b) / 2;
+      const S step = abs(next - t);
+      t = next;
+      if (step <= 4 * eps * (1 + abs(t)) || b - a <= 4 * eps * (1 + abs(t))) break;
+    }
+    x[free_[0]] = t;
+    roots.push_back(x);
   }
 
   std::vector<S> fullPoint(const std::vector<S>& y) const {
@@ -240,6 +282,17 @@ class FaceSolver {
 /// A dual k-cell: the 2^k cells around a crossed m-face, in cyclic order (k = 2).
 struct DualCell {
   std::array<std::int32_t, 4> cells{-1, -1, -1, -1};
+  std::int32_t root = -1;  ///< first root of its face, in the root list
+};
+
+/// Union-find over small integer sets (the link of one vertex).
+struct UnionFind {
+  std::vector<int> parent;
+  int find(int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  }
+  void unite(int a, int b) { parent[find(a)] = find(b); }
 };
 
 }  // namespace
@@ -265,10 +318,9 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
     rootPatches.push_back(e.template toBernstein<S>(domain));
 
   const std::size_t count = cells.size();
-  std::vector<S> crossingSum(count * n, S(0));
-  std::vector<std::int32_t> crossingCount(count, 0);
   std::vector<std::uint8_t> uncertain(count, 0);
   std::vector<DualCell> duals;
+  std::vector<S> rootPoints;  // n per recorded dual cell: the crossing it stands for
   FaceSolver<S> solver(in.system, maxFaceDepth);
   std::vector<Bernstein<S>> cellPatches(m), facePatches(m);
   std::vector<std::vector<S>> roots;
@@ -309,14 +361,14 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
       roots.clear();
       return solver.solve(point, freeAxes, facePatches, closedUpper, roots);
     };
-    const auto record = [&](const DualCell& dual, int members) {
-      for (const auto& r : roots) {
-        for (int i = 0; i < members; ++i) {
-          const std::int32_t cell = dual.cells[i];
-          for (int j = 0; j < n; ++j) crossingSum[std::size_t(cell) * n + j] += r[j];
-          ++crossingCount[cell];
-        }
-        duals.push_back(dual);
+    const auto record = [&](const DualCell& dual) {
+      // The dual complex is built mod 2: two roots on one face are the two ends of a piece
+      // of M that dips through the face and back, and their dual cells cancel.
+      if (roots.size() % 2 == 1) {
+        DualCell d = dual;
+        d.root = static_cast<std::int32_t>(rootPoints.size() / n);
+        rootPoints.insert(rootPoints.end(), roots.front().begin(), roots.front().end());
+        duals.push_back(d);
       }
     };
     if (k == 1) {
@@ -328,7 +380,7 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
         dual.cells = {below, static_cast<std::int32_t>(c), -1, -1};
         const bool certain = solveFace({a});
         if (!certain) uncertain[c] = uncertain[below] = 1;
-        record(dual, 2);
+        record(dual);
       }
     } else {
       for (int a = 0; a < n; ++a) {
@@ -343,55 +395,139 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
           if (!certain) {
             for (auto q : dual.cells) uncertain[q] = 1;
           }
-          record(dual, 4);
+          record(dual);
         }
       }
     }
   }
 
-  // Dual vertices: the Newton projection of the mean of each cell's crossings.
   ConnectionOutput<S> out;
   out.complex.n = n;
   out.complex.k = k;
-  std::vector<std::int32_t> vertexOf(count, -1);
-  std::vector<S> x(n), f(m), jacobian(std::size_t(m) * n);
+
+  // Pieces of M per cell: for k = 2 the link of a cell's vertex (one edge per incident quad,
+  // between the quad's two cells that are face neighbours of the cell) splits into connected
+  // components, one per sheet of M in the cell; each gets its own dual vertex, so two sheets
+  // in one cell do not make a non-manifold vertex. For k = 1 a cell has one piece.
+  std::vector<std::vector<std::int32_t>> incident(count);  // dual cells at each cell
+  for (std::size_t d = 0; d < duals.size(); ++d) {
+    for (int i = 0; i < (k == 1 ? 2 : 4); ++i)
+      incident[duals[d].cells[i]].push_back(std::int32_t(d));
+  }
+  // piece[d * 4 + i]: the piece of cell duals[d].cells[i] that dual cell d belongs to.
+  std::vector<std::int32_t> piece(duals.size() * 4, 0);
+  std::vector<std::int32_t> pieceCount(count, 0);
+  const auto onDomainBoundary = [&](std::size_t c) {
+    const auto ci = cells.cell(c);
+    return std::any_of(ci.begin(), ci.end(),
+                       [&](std::int32_t i) { return i == 0 || i + 1 == top; });
+  };
+  const auto slotOf = [&](std::int32_t d, std::size_t c) {
+    int at = 0;
+    while (duals[d].cells[at] != static_cast<std::int32_t>(c)) ++at;
+    return at;
+  };
   for (std::size_t c = 0; c < count; ++c) {
-    if (crossingCount[c] == 0) continue;
-    for (int j = 0; j < n; ++j) x[j] = crossingSum[c * n + j] / crossingCount[c];
-    std::vector<S> mean = x;
-    if (!in.project(x).converged) x = mean;
-    vertexOf[c] = out.complex.addVertex(x, static_cast<std::int32_t>(c));
-    // Singular cells: the Jacobian at the vertex is (nearly) rank-deficient relative to the
-    // cell size, as at self-intersections and cone points.
-    in.system.evaluate(x, f, jacobian);
-    Matrix<S> j(m, n);
-    for (int r = 0; r < m; ++r) {
-      for (int col = 0; col < n; ++col) j(r, col) = jacobian[std::size_t(r) * n + col];
+    const auto& ds = incident[c];
+    if (ds.empty()) continue;
+    const bool boundary = onDomainBoundary(c);
+    if (k == 1) {
+      pieceCount[c] = 1;
+      for (std::int32_t d : ds) piece[d * 4 + slotOf(d, c)] = 0;
+      const auto degree = ds.size();
+      if (degree != 2 && !(boundary && degree == 1)) ++out.ambiguousCells;
+      continue;
     }
-    Eigen::JacobiSVD<Matrix<S>> svd(j);
-    const auto& sigma = svd.singularValues();
-    const S widest = S(grid.cellWidth(0));
-    if (uncertain[c] || sigma(m - 1) <= sigma(0) * widest * 1e-3 || sigma(0) == 0) {
-      ++out.singularCells;
+    // Link nodes: the neighbour cells; link edges: the quads.
+    std::vector<std::int32_t> nodes;
+    std::vector<std::array<int, 2>> edges;
+    for (std::int32_t d : ds) {
+      const int at = slotOf(d, c);
+      std::array<int, 2> e{};
+      for (int side = 0; side < 2; ++side) {
+        const std::int32_t cell = duals[d].cells[(at + (side ? 3 : 1)) % 4];
+        auto it = std::find(nodes.begin(), nodes.end(), cell);
+        e[side] = static_cast<int>(it - nodes.begin());
+        if (it == nodes.end()) nodes.push_back(cell);
+      }
+      edges.push_back(e);
+    }
+    UnionFind uf{std::vector<int>(nodes.size())};
+    for (std::size_t i = 0; i < nodes.size(); ++i) uf.parent[i] = static_cast<int>(i);
+    for (const auto& e : edges) uf.unite(e[0], e[1]);
+    std::vector<int> componentOf(nodes.size(), -1), degree(nodes.size(), 0);
+    int components = 0;
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      const int r = uf.find(static_cast<int>(i));
+      if (componentOf[r] < 0) componentOf[r] = components++;
+    }
+    for (const auto& e : edges) ++degree[e[0]], ++degree[e[1]];
+    for (std::size_t q = 0; q < ds.size(); ++q) {
+      piece[ds[q] * 4 + slotOf(ds[q], c)] = componentOf[uf.find(edges[q][0])];
+    }
+    pieceCount[c] = components;
+    // One simple piece: one component that is a cycle (or a path on the domain boundary).
+    int ends = 0;
+    bool simple = components == 1;
+    for (int d : degree) {
+      if (d == 1) ++ends;
+      simple = simple && d <= 2;
+    }
+    simple = simple && (ends == 0 || (boundary && ends == 2));
+    if (!simple) ++out.ambiguousCells;
+  }
+
+  // Dual vertices: the Newton projection of the mean of each piece's crossings.
+  std::vector<std::int32_t> firstVertex(count, -1);
+  std::vector<S> sums, x(n), f(m), jacobian(std::size_t(m) * n);
+  std::vector<std::int32_t> counts;
+  const S widest = S(grid.cellWidth(0));
+  for (std::size_t c = 0; c < count; ++c) {
+    if (pieceCount[c] == 0) continue;
+    sums.assign(std::size_t(pieceCount[c]) * n, S(0));
+    counts.assign(pieceCount[c], 0);
+    for (std::int32_t d : incident[c]) {
+      const std::int32_t p = piece[d * 4 + slotOf(d, c)];
+      for (int j = 0; j < n; ++j)
+        sums[std::size_t(p) * n + j] += rootPoints[std::size_t(duals[d].root) * n + j];
+      ++counts[p];
+    }
+    for (int p = 0; p < pieceCount[c]; ++p) {
+      for (int j = 0; j < n; ++j) x[j] = sums[std::size_t(p) * n + j] / counts[p];
+      const std::vector<S> mean = x;
+      if (!in.project(x).converged) x = mean;
+      const std::int32_t v = out.complex.addVertex(x, static_cast<std::int32_t>(c));
+      if (p == 0) firstVertex[c] = v;
+      // Singular cells: the Jacobian at the vertex is (nearly) rank-deficient relative to the
+      // cell size, as at self-intersections and cone points.
+      in.system.evaluate(x, f, jacobian);
+      Matrix<S> j(m, n);
+      for (int r = 0; r < m; ++r) {
+        for (int col = 0; col < n; ++col) j(r, col) = jacobian[std::size_t(r) * n + col];
+      }
+      Eigen::JacobiSVD<Matrix<S>> svd(j);
+      const auto& sigma = svd.singularValues();
+      if (p == 0 && (uncertain[c] || sigma(0) == 0 || sigma(m - 1) <= sigma(0) * widest * 1e-3)) {
+        ++out.singularCells;
+      }
     }
   }
 
-  // Dual k-cells.
-  std::vector<std::vector<std::int32_t>> quadsOf(k == 2 ? count : 0);
-  for (const DualCell& dual : duals) {
+  // Dual k-cells on the pieces' vertices.
+  for (std::size_t d = 0; d < duals.size(); ++d) {
+    const DualCell& dual = duals[d];
+    std::array<std::int32_t, 4> v{};
+    for (int i = 0; i < (k == 1 ? 2 : 4); ++i) v[i] = firstVertex[dual.cells[i]] + piece[d * 4 + i];
     if (k == 1) {
-      const std::array<std::int32_t, 2> e{vertexOf[dual.cells[0]], vertexOf[dual.cells[1]]};
-      out.complex.addSimplex(e);
+      out.complex.addSimplex(std::array<std::int32_t, 2>{v[0], v[1]});
       continue;
     }
-    std::array<std::int32_t, 4> v;
-    for (int i = 0; i < 4; ++i) v[i] = vertexOf[dual.cells[i]];
     const auto distance = [&](int p, int q) {
       S sum = 0;
       for (int j = 0; j < n; ++j) {
-        const S d = out.complex.vertices[std::size_t(v[p]) * n + j] -
-                    out.complex.vertices[std::size_t(v[q]) * n + j];
-        sum += d * d;
+        const S diff = out.complex.vertices[std::size_t(v[p]) * n + j] -
+                       out.complex.vertices[std::size_t(v[q]) * n + j];
+        sum += diff * diff;
       }
       return sum;
     };
@@ -403,57 +539,6 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
       out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[1], v[3]});
       out.complex.addSimplex(std::array<std::int32_t, 3>{v[1], v[2], v[3]});
     }
-    for (int i = 0; i < 4; ++i)
-      quadsOf[dual.cells[i]].push_back(static_cast<std::int32_t>(&dual - duals.data()));
-  }
-
-  // Ambiguous cells: the crossings do not form one simple piece. A cell on the domain
-  // boundary may hold a piece of M that leaves the domain: an arc with one crossing (k = 1)
-  // or a half-disk whose link is a path (k = 2).
-  const auto onDomainBoundary = [&](std::size_t c) {
-    const auto ci = cells.cell(c);
-    return std::any_of(ci.begin(), ci.end(),
-                       [&](std::int32_t i) { return i == 0 || i + 1 == top; });
-  };
-  for (std::size_t c = 0; c < count; ++c) {
-    if (crossingCount[c] == 0) continue;
-    const bool boundary = onDomainBoundary(c);
-    if (k == 1) {
-      if (crossingCount[c] != 2 && !(boundary && crossingCount[c] == 1)) ++out.ambiguousCells;
-      continue;
-    }
-    // k = 2: the link of the vertex has one edge per quad, between the quad's two cells that
-    // are face neighbours of c; one disk of M means the link is one cycle (or one path).
-    std::unordered_map<std::int32_t, std::vector<std::int32_t>> link;
-    for (std::int32_t q : quadsOf[c]) {
-      const auto& cs = duals[q].cells;
-      int at = 0;
-      while (cs[at] != static_cast<std::int32_t>(c)) ++at;
-      const std::int32_t p = cs[(at + 1) % 4], r = cs[(at + 3) % 4];
-      link[p].push_back(r);
-      link[r].push_back(p);
-    }
-    std::size_t ends = 0;
-    bool simple = !link.empty();
-    for (const auto& [node, adjacent] : link) {
-      if (adjacent.size() == 1) ++ends;
-      simple = simple && adjacent.size() <= 2;
-    }
-    simple = simple && (ends == 0 || (boundary && ends == 2));
-    if (simple) {
-      // Connected: a search from one node reaches them all.
-      std::vector<std::int32_t> stack{link.begin()->first};
-      std::unordered_map<std::int32_t, bool> seen{{link.begin()->first, true}};
-      while (!stack.empty()) {
-        const std::int32_t node = stack.back();
-        stack.pop_back();
-        for (std::int32_t next : link[node]) {
-          if (seen.emplace(next, true).second) stack.push_back(next);
-        }
-      }
-      simple = seen.size() == link.size();
-    }
-    if (!simple) ++out.ambiguousCells;
   }
   return out;
 }
