@@ -1,0 +1,431 @@
+// The `crossing` connection (design.md 3, docs/crossing.md) through the whole pipeline
+// (ndc::runPipeline): closed smooth curves and surfaces in R^2..R^6 come out closed and
+// manifold with the exact number of components and Euler characteristic, a surface that leaves
+// the domain has boundary only on the domain boundary, Viviani's curve reports its double point,
+// and double and MPFR runs agree.
+//
+// Grid degeneracy: a k-manifold must meet the grid's m-faces (m = n - k) transversally and miss
+// the lower-dimensional faces. Problems that are symmetric about grid planes (the Clifford
+// torus, torus-r5) need `jitter`; the R^4 and R^6 tori below use offsets chosen so that no curve
+// of the torus lies in two grid hyperplanes at once.
+#include <catch2/catch.hpp>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <numeric>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "pipeline.hpp"
+#include "problem.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using ndc::Problem;
+using ndc::RunResult;
+using ndc::Settings;
+
+Problem example(const std::string& name) {
+  return ndc::loadProblem(fs::path(ndc::test::sourceDir()) / "experiments" / "problems" /
+                          (name + ".toml"));
+}
+
+/// A circle in R^4: S^3 cut by two affine hyperplanes (radius about 0.99).
+const char* const kCircleR4 = R"toml(name = "circle-r4"
+variables = ["x", "y", "z", "w"]
+domain = [[-1.2, 1.2], [-1.2, 1.2], [-1.2, 1.2], [-1.2, 1.2]]
+equations = ["x^2 + y^2 + z^2 + w^2 - 1", "x + y - z + 0.5*w + 0.1", "0.5*x - y + z + w - 0.15"]
+)toml";
+
+/// A torus in R^4: the graph w = xz + 0.3y + 0.0537 over the ring torus of torus.toml (|w| < 0.7).
+/// The offset keeps the equator circles (in the grid plane z = 0) off the grid lines of (y, w).
+const char* const kTorusR4 = R"toml(name = "torus-r4"
+variables = ["x", "y", "z", "w"]
+domain = [[-1.5, 1.5], [-1.5, 1.5], [-0.5, 0.5], [-1, 1]]
+equations = ["(x^2+y^2+z^2+0.84)^2 - 4*(x^2+y^2)", "w - x*z - 0.3*y - 0.0537"]
+)toml";
+
+/// Viviani's curve: the unit sphere and the cylinder through its centre tangent to it at
+/// (1, 0, 0), where the curve crosses itself (a figure eight: one component, a double point).
+const char* const kViviani = R"toml(name = "viviani"
+variables = ["x", "y", "z"]
+domain = [[-1.1, 1.1], [-1.1, 1.1], [-1.1, 1.1]]
+equations = ["x^2 + y^2 + z^2 - 1", "(x - 0.5)^2 + y^2 - 0.25"]
+)toml";
+
+/// The ring torus of torus.toml on a z range whose grid plane at depth 5 (z = 0.3962) lies just
+/// below the top circle z = 0.4: there the torus crosses grid edges twice (a thin cap).
+const char* const kTorusCap = R"toml(name = "torus-cap"
+variables = ["x", "y", "z"]
+domain = [[-1.5, 1.5], [-1.5, 1.5], [-0.47, 0.52]]
+equations = ["(x^2+y^2+z^2+0.84)^2 - 4*(x^2+y^2)"]
+)toml";
+
+Problem inlineProblem(const char* text, const std::string& name) {
+  return ndc::parseProblem(text, name + ".toml");
+}
+
+/// Settings of a crossing run in scalar S (MPFR at 128 bits).
+template <class S>
+Settings crossingSettings(int depth, std::optional<std::uint64_t> jitter = std::nullopt) {
+  Settings s;
+  s.depth = depth;
+  s.bounding = "bernstein";
+  s.subdivision = "binary";
+  s.connection = "crossing";
+  s.jitter = jitter;
+  if constexpr (std::is_same_v<S, double>) {
+    s.scalar = "double";
+    s.precisionBits = 53;
+  } else {
+    s.scalar = "mpfr";
+    s.precisionBits = 128;
+  }
+  return s;
+}
+
+template <class S>
+double residualBound() {
+  return std::is_same_v<S, double> ? 1e-10 : 1e-30;
+}
+
+std::string describe(const RunResult& r) {
+  const auto& s = r.summary;
+  const auto& m = s.mesh;
+  std::ostringstream out;
+  out << s.problem << " depth " << s.settings.depth << " " << s.settings.scalar << " jitter "
+      << (s.settings.jitter ? std::to_string(*s.settings.jitter) : "none") << ": V " << m.vertices
+      << " E " << m.edges << " T " << m.triangles << " components " << m.components << " chi "
+      << m.eulerCharacteristic << " boundary " << m.boundaryEdges << " nonmanifold "
+      << m.nonmanifoldEdges << " open " << m.openEnds << " branch " << m.branchVertices
+      << " residual " << m.maxResidual << " ambiguous " << s.ambiguousCells << " singular "
+      << s.singularCells;
+  return out.str();
+}
+
+template <class S>
+RunResult run(const Problem& problem, int depth, std::optional<std::uint64_t> jitter = {}) {
+  ndc::test::PrecisionScope<S> scope(128);
+  return ndc::runPipeline(problem, crossingSettings<S>(depth, jitter));
+}
+
+/// A closed manifold: the exact topology, no defects, vertices on M.
+template <class S>
+void checkClosed(const RunResult& r, long components, long euler) {
+  const auto& m = r.summary.mesh;
+  INFO(describe(r));
+  CHECK(m.vertices > 0);
+  CHECK(m.components == components);
+  CHECK(m.eulerCharacteristic == euler);
+  if (r.k == 1) {
+    CHECK(m.openEnds == 0);
+    CHECK(m.branchVertices == 0);
+  } else {
+    CHECK(m.boundaryEdges == 0);
+    CHECK(m.nonmanifoldEdges == 0);
+  }
+  CHECK(m.maxResidual <= residualBound<S>());
+}
+
+struct Case {
+  std::string label;
+  Problem problem;
+  int depth;
+  std::optional<std::uint64_t> jitter;
+  long components, euler;
+};
+
+template <class S>
+void checkCases(const std::vector<Case>& cases) {
+  for (const Case& c : cases) {
+    DYNAMIC_SECTION(c.label << " depth " << c.depth) {
+      checkClosed<S>(run<S>(c.problem, c.depth, c.jitter), c.components, c.euler);
+    }
+  }
+}
+
+/// Edges of a triangle mesh with the number of triangles on each.
+std::map<std::pair<std::int32_t, std::int32_t>, int> edgeCounts(const RunResult& r) {
+  std::map<std::pair<std::int32_t, std::int32_t>, int> edges;
+  for (std::size_t t = 0; t + 2 < r.simplices.size(); t += 3) {
+    for (int i = 0; i < 3; ++i) {
+      std::int32_t a = r.simplices[t + i], b = r.simplices[t + (i + 1) % 3];
+      if (a > b) std::swap(a, b);
+      ++edges[{a, b}];
+    }
+  }
+  return edges;
+}
+
+/// Degree of every vertex of a polyline.
+std::vector<int> degrees(const RunResult& r) {
+  std::vector<int> degree(r.vertices.size() / r.n, 0);
+  for (std::int32_t v : r.simplices) ++degree[v];
+  return degree;
+}
+
+/// Connected components of a graph given by its edges, counted over the vertices they touch.
+long graphComponents(const std::vector<std::pair<std::int32_t, std::int32_t>>& edges) {
+  std::map<std::int32_t, std::int32_t> parent;
+  const auto find = [&](std::int32_t v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (const auto& [a, b] : edges) {
+    parent.try_emplace(a, a);
+    parent.try_emplace(b, b);
+  }
+  for (const auto& [a, b] : edges) parent[find(a)] = find(b);
+  long count = 0;
+  for (const auto& [v, p] : parent) count += v == p;
+  return count;
+}
+
+}  // namespace
+
+// --- Closed curves (k = 1) in R^2 .. R^6 -------------------------------------------------------
+
+TEMPLATE_TEST_CASE("crossing: closed curves in R^2..R^6", "[crossing]", NDC_SCALARS) {
+  checkCases<TestType>({
+      {"circle (R^2)", example("circle"), 5, {}, 1, 0},
+      {"two-circles (R^2)", example("two-circles"), 5, {}, 2, 0},
+      {"circle-3d (R^3)", example("circle-3d"), 4, {}, 1, 0},
+      {"circle-r4 (R^4)", inlineProblem(kCircleR4, "circle-r4"), 4, {}, 1, 0},
+      {"space-curve-r4 (R^4)", example("space-curve-r4"), 4, {}, 1, 0},
+      {"circle-r5 (R^5)", example("circle-r5"), 4, {}, 1, 0},
+      {"circle-r6 (R^6)", example("circle-r6"), 4, {}, 1, 0},
+  });
+}
+
+// --- Closed surfaces (k = 2) in R^3 and R^4 ------------------------------------------------------
+
+TEMPLATE_TEST_CASE("crossing: closed surfaces in R^3 and R^4", "[crossing]", NDC_SCALARS) {
+  checkCases<TestType>({
+      {"sphere (R^3)", example("sphere"), 4, {}, 1, 2},
+      {"two-spheres (R^3)", example("two-spheres"), 4, {}, 2, 4},
+      {"torus (R^3)", example("torus"), 4, {}, 1, 0},
+      {"sphere-r4 (S^2 in R^4)", example("sphere-r4"), 4, {}, 1, 2},
+      // On [-1, 1]^4 the Clifford torus lies along grid faces: jitter is required.
+      {"clifford-torus (R^4), jitter 1", example("clifford-torus"), 4, 1, 1, 0},
+      {"torus-r4 (graph over the ring torus)", inlineProblem(kTorusR4, "torus-r4"), 4, {}, 1, 0},
+  });
+}
+
+TEST_CASE("crossing: closed curves and surfaces at depth 5 and 6", "[crossing][slow]") {
+  checkCases<double>({
+      {"circle", example("circle"), 6, {}, 1, 0},
+      {"two-circles", example("two-circles"), 6, {}, 2, 0},
+      {"circle-3d", example("circle-3d"), 5, {}, 1, 0},
+      {"circle-r4", inlineProblem(kCircleR4, "circle-r4"), 5, {}, 1, 0},
+      {"space-curve-r4", example("space-curve-r4"), 5, {}, 1, 0},
+      {"circle-r5", example("circle-r5"), 5, {}, 1, 0},
+      {"circle-r6", example("circle-r6"), 5, {}, 1, 0},
+      {"sphere", example("sphere"), 5, {}, 1, 2},
+      {"two-spheres", example("two-spheres"), 5, {}, 2, 4},
+      {"torus", example("torus"), 5, {}, 1, 0},
+      {"torus", example("torus"), 6, {}, 1, 0},
+      {"sphere-r4", example("sphere-r4"), 5, {}, 1, 2},
+      {"clifford-torus, jitter 1", example("clifford-torus"), 5, 1, 1, 0},
+      {"torus-r4", inlineProblem(kTorusR4, "torus-r4"), 5, {}, 1, 0},
+      {"torus-r4", inlineProblem(kTorusR4, "torus-r4"), 6, {}, 1, 0},
+      // torus-r5 is symmetric about grid planes: without jitter it folds (chi -18 at depth 5).
+      {"torus-r5, jitter 2", example("torus-r5"), 5, 2, 1, 0},
+      {"torus-r6", example("torus-r6"), 5, {}, 1, 0},
+  });
+}
+
+// Known failures of the crossing connection, kept with their true expectations ([!mayfail]) so
+// that they pass once it is fixed. sphere-r6, genus2 and torus-cap are traced to one cause
+// (torus-r6 at depth 4 has the same signature, untraced): M crosses one m-face twice (it passes
+// nearly tangent to the face, or a thin cap or ridge lies between two grid planes), the face
+// yields two identical dual cells, and their edges are counted 4 times (non-manifold) or the
+// cells around them lose a neighbour (boundary edges). Emitting a dual cell only for an odd number
+// of roots on the face (closed mod 2, as with signs in 3-D dual contouring) would avoid it.
+
+TEST_CASE("crossing: surfaces in R^6 at depths 4 and 5", "[crossing][slow][!mayfail]") {
+  // sphere-r6: 2 boundary and 2 non-manifold edges at depths 4 and 5 (also with jitter 1, 2):
+  // the grid 4-face x4 = -0.3, x5 = 0.375 (cell (21, 6, 15, 20) in x1, x2, x3, x6 at depth 5)
+  // holds both points of M on that 2-plane, 0.028 apart. torus-r6: 2 and 2 at depth 4.
+  checkCases<double>({
+      {"sphere-r6", example("sphere-r6"), 4, {}, 1, 2},
+      {"sphere-r6", example("sphere-r6"), 5, {}, 1, 2},
+      {"torus-r6", example("torus-r6"), 4, {}, 1, 0},
+  });
+}
+
+TEST_CASE("crossing: a genus-2 surface", "[crossing][!mayfail]") {
+  // Flat along the lemniscate (z = +-0.1 where f = 0): where a grid plane lies just below that
+  // ridge, the surface crosses grid edges twice and the dual quads double up.
+  checkCases<double>({
+      {"genus2", example("genus2"), 5, {}, 1, -2},
+      {"genus2", example("genus2"), 7, {}, 1, -2},
+  });
+}
+
+TEST_CASE("crossing: a thin cap crosses a grid edge twice", "[crossing][!mayfail]") {
+  // The ring torus of torus.toml, with a z grid plane 0.004 below its top circle at depth 5.
+  checkCases<double>({{"torus-cap", inlineProblem(kTorusCap, "torus-cap"), 5, {}, 1, 0}});
+}
+
+// --- A surface that leaves the domain ------------------------------------------------------------
+
+TEMPLATE_TEST_CASE("crossing: the cylinder has boundary only on the domain boundary", "[crossing]",
+                   NDC_SCALARS) {
+  const Problem problem = example("cylinder");
+  for (int depth : {4, 5}) {
+    if (!std::is_same_v<TestType, double> && depth > 4) continue;
+    DYNAMIC_SECTION("depth " << depth) {
+      const RunResult r = run<TestType>(problem, depth);
+      INFO(describe(r));
+      const auto& m = r.summary.mesh;
+      CHECK(m.components == 1);
+      CHECK(m.eulerCharacteristic == 0);  // an annulus
+      CHECK(m.nonmanifoldEdges == 0);
+      CHECK(m.maxResidual <= residualBound<TestType>());
+      REQUIRE(m.boundaryEdges > 0);
+
+      const int n = r.n;
+      std::vector<double> width(n);
+      for (int j = 0; j < n; ++j)
+        width[j] = (problem.domain.hi[j] - problem.domain.lo[j]) / double(1 << depth);
+      // Within one cell width (a boundary cell's vertex may sit on its inner face, exactly one
+      // width from the domain boundary: allow rounding).
+      for (double& w : width) w *= 1 + 1e-9;
+      const auto nearBoundary = [&](std::int32_t v) {
+        for (int j = 0; j < n; ++j) {
+          const double x = r.vertices[std::size_t(v) * n + j];
+          if (x - problem.domain.lo[j] <= width[j] || problem.domain.hi[j] - x <= width[j])
+            return true;
+        }
+        return false;
+      };
+      std::vector<std::pair<std::int32_t, std::int32_t>> boundary;
+      long far = 0;
+      for (const auto& [edge, triangles] : edgeCounts(r)) {
+        if (triangles != 1) continue;
+        boundary.push_back(edge);
+        if (!nearBoundary(edge.first) || !nearBoundary(edge.second)) ++far;
+      }
+      CHECK(long(boundary.size()) == m.boundaryEdges);
+      CHECK(far == 0);
+      // The boundary is two closed curves (z = -0.7 and z = 0.9): every boundary vertex has
+      // two boundary edges.
+      CHECK(graphComponents(boundary) == 2);
+      std::map<std::int32_t, int> degree;
+      for (const auto& [a, b] : boundary) ++degree[a], ++degree[b];
+      long odd = 0;
+      for (const auto& [v, d] : degree) odd += d != 2;
+      CHECK(odd == 0);
+    }
+  }
+}
+
+// --- Viviani's curve: a double point -------------------------------------------------------------
+
+TEMPLATE_TEST_CASE("crossing: Viviani's curve reports its double point", "[crossing]",
+                   NDC_SCALARS) {
+  // Without jitter the double point (1, 0, 0) lies on the grid line y = z = 0.
+  const Problem problem = inlineProblem(kViviani, "viviani");
+  for (std::uint64_t jitter : {1, 2}) {
+    DYNAMIC_SECTION("jitter " << jitter) {
+      const int depth = 5;
+      const RunResult r = run<TestType>(problem, depth, jitter);
+      INFO(describe(r));
+      const auto& s = r.summary;
+      CHECK(s.mesh.components == 1);
+      CHECK(s.mesh.openEnds == 0);
+      CHECK(s.ambiguousCells + s.singularCells > 0);
+      CHECK(s.mesh.maxResidual <= residualBound<TestType>());
+      // Every vertex whose degree is not 2 lies at the double point (within two cells).
+      const double h = 2.2 / double(1 << depth), reach = 2 * std::sqrt(3.0) * h;
+      const std::vector<int> degree = degrees(r);
+      long defects = 0, far = 0;
+      for (std::size_t v = 0; v < degree.size(); ++v) {
+        if (degree[v] == 2) continue;
+        ++defects;
+        const double* x = &r.vertices[v * 3];
+        const double d = std::hypot(x[0] - 1, x[1], x[2]);
+        if (d > reach) ++far;
+      }
+      CHECK(defects == s.mesh.branchVertices + s.mesh.openEnds);
+      CHECK(far == 0);
+    }
+  }
+}
+
+// --- double and MPFR agree -----------------------------------------------------------------------
+
+TEST_CASE("crossing: double and mpfr runs agree", "[crossing]") {
+  const std::vector<Case> cases{
+      {"circle-r5", example("circle-r5"), 4, {}, 1, 0},
+      {"two-spheres", example("two-spheres"), 4, {}, 2, 4},
+      {"torus", example("torus"), 4, {}, 1, 0},
+      {"clifford-torus, jitter 1", example("clifford-torus"), 4, 1, 1, 0},
+      {"viviani, jitter 1", inlineProblem(kViviani, "viviani"), 5, 1, 1, 0},
+  };
+  for (const Case& c : cases) {
+    DYNAMIC_SECTION(c.label) {
+      const RunResult d = run<double>(c.problem, c.depth, c.jitter);
+      const RunResult q = run<ndc::Mpfr>(c.problem, c.depth, c.jitter);
+      INFO(describe(d) << "\n" << describe(q));
+      const auto &a = d.summary.mesh, &b = q.summary.mesh;
+      CHECK(a.vertices == b.vertices);
+      CHECK(a.edges == b.edges);
+      CHECK(a.triangles == b.triangles);
+      CHECK(a.components == b.components);
+      CHECK(a.eulerCharacteristic == b.eulerCharacteristic);
+      CHECK(a.boundaryEdges == b.boundaryEdges);
+      CHECK(a.nonmanifoldEdges == b.nonmanifoldEdges);
+      CHECK(a.openEnds == b.openEnds);
+      CHECK(a.branchVertices == b.branchVertices);
+      CHECK(d.summary.solution == q.summary.solution);
+      // The same cells give the same vertices, up to the double run's accuracy.
+      REQUIRE(d.vertices.size() == q.vertices.size());
+      double worst = 0;
+      for (std::size_t i = 0; i < d.vertices.size(); ++i)
+        worst = std::max(worst, std::abs(d.vertices[i] - q.vertices[i]));
+      CHECK(worst <= 1e-9);
+    }
+  }
+}
+
+// --- The command line ----------------------------------------------------------------------------
+
+TEST_CASE("crossing: ndcontour solve --connection crossing --json", "[crossing]") {
+  const fs::path out =
+      fs::temp_directory_path() / ("ndc-test-crossing-" + std::to_string(::getpid()) + ".json");
+  const std::string torus =
+      (fs::path(ndc::test::sourceDir()) / "experiments" / "problems" / "torus.toml").string();
+  const std::string command = "'" + ndc::test::binaryPath() + "' solve '" + torus +
+                              "' --connection crossing --depth 4 --json >'" + out.string() +
+                              "' 2>/dev/null </dev/null";
+  const int raw = std::system(command.c_str());
+  std::ifstream in(out);
+  std::ostringstream text;
+  text << in.rdbuf();
+  std::error_code ec;
+  fs::remove(out, ec);
+  INFO(text.str());
+  REQUIRE(WIFEXITED(raw));
+  CHECK(WEXITSTATUS(raw) == 0);
+  const std::string json = text.str();
+  CHECK(json.find("\"connection\": \"crossing\"") != std::string::npos);
+  CHECK(json.find("\"boundary_edges\": 0") != std::string::npos);
+  CHECK(json.find("\"nonmanifold_edges\": 0") != std::string::npos);
+  CHECK(json.find("\"components\": 1") != std::string::npos);
+  CHECK(json.find("\"euler_characteristic\": 0") != std::string::npos);
+}
