@@ -209,7 +209,7 @@ TEST_CASE("cli: usage errors exit 2 with one line", "[cli]") {
 
   // Unknown strategy names list the accepted ones.
   checkBadInput(ndcontour("solve " + valid + " --bounding taylor"),
-                {"--bounding", "'taylor'", "bernstein, interval"});
+                {"--bounding", "'taylor'", "bernstein, interval, linearized"});
   checkBadInput(ndcontour("solve " + valid + " --subdivision octree"),
                 {"--subdivision", "'octree'", "uniform, binary"});
   checkBadInput(ndcontour("solve " + valid + " --classification magic"),

@@ -26,7 +26,8 @@ class UsageError : public std::runtime_error {
 };
 
 /// Names accepted on the command line for each strategy family and the scalar type.
-inline constexpr std::array<std::string_view, 2> kBoundingNames = {"bernstein", "interval"};
+inline constexpr std::array<std::string_view, 3> kBoundingNames = {"bernstein", "interval",
+                                                                   "linearized"};
 inline constexpr std::array<std::string_view, 2> kSubdivisionNames = {"uniform", "binary"};
 inline constexpr std::array<std::string_view, 1> kClassificationNames = {"paper"};
 inline constexpr std::array<std::string_view, 3> kConnectionNames = {"paper", "naive", "crossing"};

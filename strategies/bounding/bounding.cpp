@@ -1,7 +1,9 @@
 #include "strategies/bounding/bounding.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
+#include <span>
 #include <stdexcept>
 #include <string>
 
@@ -121,19 +123,530 @@ bool IntervalBounding<S>::mayContainZero(const State& state) const {
   return true;
 }
 
+// --- LinearizedBounding --------------------------------------------------------------------------
+
+namespace {
+
+// Total degree of a syntax tree, saturated at 2: only "at most 1" (affine) matters here.
+int totalDegree(const ExprNode& node) {
+  using K = ExprNode::Kind;
+  switch (node.kind) {
+    case K::kNumber:
+      return 0;
+    case K::kVariable:
+      return 1;
+    case K::kAdd:
+    case K::kSub:
+      return std::max(totalDegree(*node.left), totalDegree(*node.right));
+    case K::kMul:
+      return std::min(2, totalDegree(*node.left) + totalDegree(*node.right));
+    case K::kDiv:  // the divisor is a constant
+    case K::kNeg:
+      return totalDegree(*node.left);
+    case K::kPow: {
+      const int d = totalDegree(*node.left);
+      return node.exponent == 0 || d == 0 ? 0 : (node.exponent == 1 ? d : 2);
+    }
+  }
+  return 2;
+}
+
+// Midpoint-radius products and sums: z = x * y and z = x + s y (s = +-1), each with the
+// rounding of its midpoint (u |z| bounds it, u >= 2 x unit round-off) and of its radius (the
+// factor up = 1 + 8 u) absorbed in the radius. Underflow is ignored.
+template <class S>
+void mulMidRad(const S& xm, const S& xr, const S& ym, const S& yr, const S& u, const S& up, S& zm,
+               S& zr) {
+  using std::abs;
+  S m = xm * ym;
+  S r = (abs(xm) * yr + xr * abs(ym) + xr * yr + u * abs(m)) * up;
+  zm = std::move(m);
+  zr = std::move(r);
+}
+
+template <class S>
+void addMidRad(S& xm, S& xr, const S& ym, const S& yr, bool subtract, const S& u, const S& up) {
+  using std::abs;
+  if (subtract)
+    xm -= ym;
+  else
+    xm += ym;
+  xr = (xr + yr + u * abs(xm)) * up;
+}
+
+template <class S>
+bool isZero(const S& m, const S& r) {
+  return m == 0 && r == 0;
+}
+
+}  // namespace
+
+template <class S>
+void LinearizedBounding<S>::compile(const ExprNode& node, std::vector<Op>& tape, int depth,
+                                    int& maxDepth) {
+  // Postfix order: an operand occupies stack slot `depth`, a right operand `depth + 1`.
+  using K = ExprNode::Kind;
+  maxDepth = std::max(maxDepth, depth + 1);
+  Op op{Op::kConst, 0, S(0), S(0)};
+  switch (node.kind) {
+    case K::kNumber: {
+      const Interval<S> literal = Interval<S>::fromString(node.literal);
+      op.mid = literal.midpoint();
+      op.rad = std::max(literal.upper() - op.mid, op.mid - literal.lower()) *
+               (S(1) + 8 * ScalarTraits<S>::epsilon());
+      break;
+    }
+    case K::kVariable:
+      op.kind = Op::kVar;
+      op.arg = node.variable;
+      break;
+    case K::kAdd:
+    case K::kSub:
+    case K::kMul:
+    case K::kDiv:
+      compile(*node.left, tape, depth, maxDepth);
+      compile(*node.right, tape, depth + 1, maxDepth);
+      op.kind = node.kind == K::kAdd   ? Op::kAdd
+                : node.kind == K::kSub ? Op::kSub
+                : node.kind == K::kMul ? Op::kMul
+                                       : Op::kDiv;
+      break;
+    case K::kPow:
+      compile(*node.left, tape, depth, maxDepth);
+      op.kind = Op::kPow;
+      op.arg = node.exponent;
+      break;
+    case K::kNeg:
+      compile(*node.left, tape, depth, maxDepth);
+      op.kind = Op::kNeg;
+      break;
+  }
+  tape.push_back(std::move(op));
+}
+
+template <class S>
+LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& domain)
+    : bernstein_(problem, domain), n_(problem.n()), m_(static_cast<int>(problem.equations.size())) {
+  const auto n = static_cast<std::size_t>(n_), m = static_cast<std::size_t>(m_);
+  const auto k = n >= m ? n - m : 0;
+  // Enabled when the equations are coupled: for equations in disjoint variables a box holds a
+  // common zero iff each F_i vanishes on its own factor of the box, which the per-equation
+  // hulls already test. More equations than variables: J_c^T has no full column rank.
+  std::vector<int> users(n, 0);  // equations using each variable
+  for (const Expression& e : problem.equations) {
+    const std::vector<int> degrees = e.degrees();
+    for (std::size_t j = 0; j < n; ++j) users[j] += degrees[j] > 0;
+  }
+  enabled_ =
+      m_ >= 2 && m_ <= n_ && std::any_of(users.begin(), users.end(), [](int c) { return c >= 2; });
+  // 8 (n + m + 8) eps >= 2 gamma_p for every dot product length p used below (eps = 2u).
+  u_ = ScalarTraits<S>::epsilon();
+  tol_ = S(8 * (n_ + m_ + 8)) * u_;
+  int depth = 1;
+  tapes_.resize(m);
+  for (std::size_t i = 0; i < m; ++i) compile(problem.equations[i].root(), tapes_[i], 0, depth);
+  stackMid_.assign(static_cast<std::size_t>(depth) * (n + 1), S(0));
+  stackRad_.assign(static_cast<std::size_t>(depth) * (n + 1), S(0));
+  c_.resize(n);
+  h_.resize(n);
+  zero_.assign(n, S(0));
+  jac_.resize(m * n);
+  mu_.resize(m);
+  rho_.resize(m);
+  w_.resize(n * m);
+  beta_.resize(m);
+  diag_.resize(m);
+  q_.resize(n * n);
+  p_.resize(m * m);
+  pj_.resize(m * n);
+  pjAbs_.resize(m * n);
+  mig_.resize(m);
+  pinv_.resize(n * m);
+  a_.resize(n);
+  b_.resize(n);
+  tlo_.resize(k);
+  thi_.resize(k);
+  // Affine equations have a constant gradient: enclose it once, by the outward-rounded interval
+  // gradient over the domain (the constant up to the rounding of the literals).
+  affine_.assign(m, 0);
+  affineMid_.assign(m * n, S(0));
+  affineRad_.assign(m * n, S(0));
+  std::vector<Interval<S>> box(n), gradient(n);
+  for (std::size_t j = 0; j < n; ++j) box[j] = Interval<S>(domain.lo[j], domain.hi[j]);
+  for (std::size_t i = 0; i < m; ++i) {
+    if (totalDegree(problem.equations[i].root()) > 1) continue;
+    affine_[i] = 1;
+    problem.equations[i].evaluate<S>(std::span<const Interval<S>>(box),
+                                     std::span<Interval<S>>(gradient));
+    for (std::size_t j = 0; j < n; ++j) {
+      const S mid = gradient[j].midpoint();
+      affineMid_[i * n + j] = mid;
+      affineRad_[i * n + j] =
+          std::max(gradient[j].upper() - mid, mid - gradient[j].lower()) * (S(1) + tol_);
+    }
+  }
+}
+
+template <class S>
+bool LinearizedBounding<S>::run(const std::vector<Op>& tape, std::span<const S> radius,
+                                bool gradient) const {
+  using std::abs;
+  using std::isfinite;
+  const std::size_t stride = gradient ? static_cast<std::size_t>(n_) + 1 : 1;
+  const S& u = u_;
+  const S up = S(1) + 8 * u;
+  S tm, tr, sm, sr, fm, fr;  // temporaries of the products
+  std::size_t top = 0;       // number of occupied slots
+  for (const Op& op : tape) {
+    if (op.kind == Op::kConst || op.kind == Op::kVar) {
+      S* m = &stackMid_[top * stride];
+      S* r = &stackRad_[top * stride];
+      ++top;
+      for (std::size_t q = 1; q < stride; ++q) m[q] = r[q] = 0;
+      if (op.kind == Op::kConst) {
+        m[0] = op.mid;
+        r[0] = op.rad;
+      } else {
+        m[0] = c_[op.arg];
+        r[0] = radius[op.arg];
+        if (gradient) m[op.arg + 1] = 1;
+      }
+      continue;
+    }
+    // Unary operators act on the top slot, binary ones on the two top slots (x below y).
+    if (op.kind != Op::kPow && op.kind != Op::kNeg) --top;
+    S* xm = &stackMid_[(top - 1) * stride];
+    S* xr = &stackRad_[(top - 1) * stride];
+    const S* ym = xm + stride;
+    const S* yr = xr + stride;
+    switch (op.kind) {
+      case Op::kAdd:
+      case Op::kSub:
+        for (std::size_t q = 0; q < stride; ++q)
+          if (!isZero(ym[q], yr[q]))
+            addMidRad(xm[q], xr[q], ym[q], yr[q], op.kind == Op::kSub, u, up);
+        break;
+      case Op::kMul:
+        // Product rule (xy)' = x' y + x y', then the value.
+        for (std::size_t q = 1; q < stride; ++q) {
+          const bool zx = isZero(xm[q], xr[q]), zy = isZero(ym[q], yr[q]);
+          if (zx && zy) continue;
+          mulMidRad(xm[0], xr[0], ym[q], yr[q], u, up, sm, sr);
+          if (zx) {
+            xm[q] = sm;
+            xr[q] = sr;
+            continue;
+          }
+          mulMidRad(xm[q], xr[q], ym[0], yr[0], u, up, xm[q], xr[q]);
+          if (!zy) addMidRad(xm[q], xr[q], sm, sr, false, u, up);
+        }
+        mulMidRad(xm[0], xr[0], ym[0], yr[0], u, up, xm[0], xr[0]);
+        break;
+      case Op::kDiv: {
+        // The divisor is a constant: multiply by an enclosure of its reciprocal.
+        const S mag = abs(ym[0]);
+        const S gap = mag - yr[0];
+        if (!(gap > 2 * u * mag)) return false;
+        fm = S(1) / ym[0];
+        fr = (yr[0] / (mag * gap) + u * abs(fm)) * up;
+        for (std::size_t q = 0; q < stride; ++q)
+          if (!isZero(xm[q], xr[q])) mulMidRad(xm[q], xr[q], fm, fr, u, up, xm[q], xr[q]);
+        break;
+      }
+      case Op::kPow: {
+        // x^p = x^(p-1) x by binary powering, and (x^p)' = p x^(p-1) x'.
+        if (op.arg == 0) {
+          xm[0] = 1;
+          xr[0] = 0;
+          for (std::size_t q = 1; q < stride; ++q) xm[q] = xr[q] = 0;
+          break;
+        }
+        tm = 1;
+        tr = 0;
+        sm = xm[0];
+        sr = xr[0];
+        for (int e = op.arg - 1; e > 0; e >>= 1) {
+          if (e & 1) mulMidRad(tm, tr, sm, sr, u, up, tm, tr);
+          if (e > 1) mulMidRad(sm, sr, sm, sr, u, up, sm, sr);
+        }
+        mulMidRad(S(op.arg), S(0), tm, tr, u, up, fm, fr);
+        for (std::size_t q = 1; q < stride; ++q)
+          if (!isZero(xm[q], xr[q])) mulMidRad(fm, fr, xm[q], xr[q], u, up, xm[q], xr[q]);
+        mulMidRad(tm, tr, xm[0], xr[0], u, up, xm[0], xr[0]);
+        break;
+      }
+      case Op::kNeg:
+        for (std::size_t q = 0; q < stride; ++q) xm[q] = -xm[q];
+        break;
+      default:
+        break;
+    }
+  }
+  return isfinite(stackMid_[0]) && isfinite(stackRad_[0]);
+}
+
+template <class S>
+bool LinearizedBounding<S>::mayContainZero(const State& state) const {
+  // The per-equation hulls first: cheap, and they discard most boxes far from every F_i = 0.
+  if (!bernstein_.mayContainZero(state)) return false;
+  return !enabled_ || !linearizationExcludes(state.box);
+}
+
+template <class S>
+bool LinearizedBounding<S>::linearizationExcludes(const Box<S>& box) const {
+  if (!enabled_) return false;
+  using std::abs;
+  using std::isfinite;
+  using std::sqrt;
+  const int n = n_, m = m_, k = n_ - m_;
+  const S& tol = tol_;
+  const S up = S(1) + tol;
+  const auto at = [](int row, int col, int cols) {
+    return static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) +
+           static_cast<std::size_t>(col);
+  };
+
+  // 1. Centre c and half-widths h >= |x - c| on the box (rounded up).
+  S hh = 0;  // |h|_2^2
+  for (int j = 0; j < n; ++j) {
+    c_[j] = (box.lo[j] + box.hi[j]) / 2;
+    h_[j] = std::max(box.hi[j] - c_[j], c_[j] - box.lo[j]) * up;
+    hh += h_[j] * h_[j];
+  }
+  hh *= up;
+
+  // 2. The linearised system J_c d = -g, g in G = mu_i +- rho_i: F(c) enclosed at the point,
+  // J_c = mid J(X), r_i = sum_j mag(J_ij(X) - J_c,ij) h_j = sum_j rad J_ij(X) h_j (mean value
+  // theorem).
+  for (int i = 0; i < m; ++i) {
+    S* jac = &jac_[at(i, 0, n)];
+    S r = 0;
+    if (affine_[i]) {
+      for (int j = 0; j < n; ++j) {
+        jac[j] = affineMid_[at(i, j, n)];
+        r += affineRad_[at(i, j, n)] * h_[j];
+      }
+    } else {
+      if (!run(tapes_[i], h_, true)) return false;
+      for (int j = 0; j < n; ++j) {
+        jac[j] = stackMid_[static_cast<std::size_t>(j) + 1];
+        r += stackRad_[static_cast<std::size_t>(j) + 1] * h_[j];
+      }
+    }
+    if (!run(tapes_[i], zero_, false)) return false;
+    mu_[i] = stackMid_[0];
+    rho_[i] = (stackRad_[0] + r * up) * up;
+    if (!isfinite(rho_[i])) return false;
+  }
+
+  // 3. Householder QR of J_c^T (n x m, column i = row i of J_c): J_c^T = Q [R; 0]. A pivot
+  // below 1e-10 of the largest row norm means J_c is (nearly) rank-deficient: keep the box.
+  std::copy(jac_.begin(), jac_.end(), w_.begin());
+  S scale = 0;
+  for (int i = 0; i < m; ++i) {
+    S s = 0;
+    for (int j = 0; j < n; ++j) s += jac_[at(i, j, n)] * jac_[at(i, j, n)];
+    scale = std::max(scale, s);
+  }
+  if (!(scale > 0) || !isfinite(scale)) return false;
+  const S pivotFloor = sqrt(scale) * S(1e-10);
+  for (int i = 0; i < m; ++i) {
+    S* v = &w_[at(i, 0, n)];
+    S norm2 = 0;
+    for (int r = i; r < n; ++r) norm2 += v[r] * v[r];
+    const S norm = sqrt(norm2);
+    if (!(norm > pivotFloor)) return false;
+    // Reflector I - beta v v^T mapping the column to alpha e_i; alpha has the opposite sign of
+    // v_i, so v_i - alpha does not cancel.
+    const S alpha = v[i] > 0 ? S(-norm) : norm;
+    const S vv = 2 * (norm2 - alpha * v[i]);
+    v[i] -= alpha;
+    beta_[i] = 2 / vv;
+    diag_[i] = alpha;
+    for (int col = i + 1; col < m; ++col) {
+      S* x = &w_[at(col, 0, n)];
+      S s = 0;
+      for (int r = i; r < n; ++r) s += v[r] * x[r];
+      s *= beta_[i];
+      for (int r = i; r < n; ++r) x[r] -= s * v[r];
+    }
+  }
+  // Q = H_0 ... H_{m-1}, accumulated backwards (H_i only touches columns >= i of the partial
+  // product). Columns 0..m-1 are Q1 (the row space of J_c), m..n-1 are N = Q2 (its kernel).
+  std::fill(q_.begin(), q_.end(), S(0));
+  for (int j = 0; j < n; ++j) q_[at(j, j, n)] = 1;
+  for (int i = m - 1; i >= 0; --i) {
+    const S* v = &w_[at(i, 0, n)];
+    for (int col = i; col < n; ++col) {
+      S* x = &q_[at(col, 0, n)];
+      S s = 0;
+      for (int r = i; r < n; ++r) s += v[r] * x[r];
+      s *= beta_[i];
+      for (int r = i; r < n; ++r) x[r] -= s * v[r];
+    }
+  }
+  const auto q1 = [&](int row, int col) -> const S& { return q_[at(col, row, n)]; };
+  const auto nul = [&](int row, int col) -> const S& { return q_[at(m + col, row, n)]; };
+
+  // 4. P = L^{-1} with L = R^T (L L^T = J_c J_c^T): L(i,i) = diag_i, L(i,t) = R(t,i) = w_[i][t].
+  for (int col = 0; col < m; ++col) {
+    for (int i = 0; i < m; ++i) {
+      if (i < col) {
+        p_[at(i, col, m)] = 0;
+        continue;
+      }
+      S s = i == col ? S(1) : S(0);
+      for (int t = col; t < i; ++t) s -= w_[at(i, t, n)] * p_[at(t, col, m)];
+      p_[at(i, col, m)] = s / diag_[i];
+    }
+  }
+
+  // 5. Row test. P J_c d = -P g, and P J_c = Q1^T up to rounding; its computed value carries
+  // the error bound tol |P| |J_c| (gamma_m of an m-term dot product).
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < n; ++j) {
+      S s = 0, sa = 0;
+      for (int t = 0; t <= i; ++t) {
+        s += p_[at(i, t, m)] * jac_[at(t, j, n)];
+        sa += abs(p_[at(i, t, m)]) * abs(jac_[at(t, j, n)]);
+      }
+      pj_[at(i, j, n)] = s;
+      pjAbs_[at(i, j, n)] = sa;
+    }
+  S migSq = 0;
+  for (int i = 0; i < m; ++i) {
+    S v = 0, va = 0, vr = 0;  // (P mu)_i, (|P| |mu|)_i, (|P| rho)_i
+    for (int t = 0; t <= i; ++t) {
+      v += p_[at(i, t, m)] * mu_[t];
+      va += abs(p_[at(i, t, m)]) * abs(mu_[t]);
+      vr += abs(p_[at(i, t, m)]) * rho_[t];
+    }
+    // A lower bound of |(P g)_i| over g in G (the last term covers the roundings here).
+    const S absV = abs(v);
+    S mig = absV - tol * va - vr - tol * (absV + va + vr);
+    if (!(mig > 0)) mig = 0;
+    mig_[i] = mig;
+    S reach = 0;  // upper bound of sum_j |(P J_c)_ij| h_j
+    for (int j = 0; j < n; ++j)
+      reach += (abs(pj_[at(i, j, n)]) + tol * pjAbs_[at(i, j, n)]) * h_[j];
+    if (mig > reach * up) return true;
+    migSq += mig * mig;
+  }
+
+  // 6. Ball test: |P J_c d|_2 <= |P J_c|_2 |d|_2 <= |P J_c|_2 |h|_2, with
+  // |P J_c|_2 <= sqrt(|M M^T|_inf) + |E|_F for the computed M and its error bound E.
+  S gram = 0, errF = 0;
+  for (int i = 0; i < m; ++i) {
+    S row = 0;
+    for (int t = 0; t < m; ++t) {
+      S g = 0, ga = 0;
+      for (int j = 0; j < n; ++j) {
+        g += pj_[at(i, j, n)] * pj_[at(t, j, n)];
+        ga += abs(pj_[at(i, j, n)]) * abs(pj_[at(t, j, n)]);
+      }
+      row += abs(g) + tol * ga;
+    }
+    gram = std::max(gram, row);
+    for (int j = 0; j < n; ++j) errF += (tol * pjAbs_[at(i, j, n)]) * (tol * pjAbs_[at(i, j, n)]);
+  }
+  const S normBound = (sqrt(gram * up) + sqrt(errF * up)) * up;
+  if (migSq * (S(1) - tol) > normBound * normBound * hh * up) return true;
+
+  // 7. Null-space test. With J^+ = Q1 P (n x m) and D = I - J^+ J_c - N N^T, every solution
+  // is d = -J^+ g + N t + D d with t = N^T d, so for every axis j
+  // |(N t)_j - (J^+ mu)_j| <= h_j + (|J^+| rho)_j + (|D| h)_j =: b_j.
+  for (int j = 0; j < n; ++j)
+    for (int t = 0; t < m; ++t) {
+      S s = 0;
+      for (int i = t; i < m; ++i) s += q1(j, i) * p_[at(i, t, m)];
+      pinv_[at(j, t, m)] = s;
+    }
+  for (int j = 0; j < n; ++j) {
+    S a = 0, aa = 0, ar = 0;  // (J^+ mu)_j, (|J^+| |mu|)_j, (|J^+| rho)_j
+    for (int t = 0; t < m; ++t) {
+      const S& pv = pinv_[at(j, t, m)];
+      a += pv * mu_[t];
+      aa += abs(pv) * abs(mu_[t]);
+      ar += abs(pv) * rho_[t];
+    }
+    S dh = 0;  // (|D| h)_j with D's rounding error bound
+    for (int l = 0; l < n; ++l) {
+      S d = j == l ? S(1) : S(0), da = d;
+      for (int t = 0; t < m; ++t) {
+        d -= pinv_[at(j, t, m)] * jac_[at(t, l, n)];
+        da += abs(pinv_[at(j, t, m)]) * abs(jac_[at(t, l, n)]);
+      }
+      for (int p = 0; p < k; ++p) {
+        d -= nul(j, p) * nul(l, p);
+        da += abs(nul(j, p)) * abs(nul(l, p));
+      }
+      dh += (abs(d) + tol * da) * h_[l];
+    }
+    a_[j] = a;
+    b_[j] = (h_[j] + ar + dh + tol * (2 * aa + ar + dh)) * up;
+  }
+  // Propagate the constraints on t over the box |t_p| <= sum_j |N_jp| h_j; for k = 1 a single
+  // sweep intersects n intervals and is exact.
+  for (int p = 0; p < k; ++p) {
+    S tau = 0;
+    for (int j = 0; j < n; ++j) tau += abs(nul(j, p)) * h_[j];
+    thi_[p] = tau * up;
+    tlo_[p] = -thi_[p];
+  }
+  const int sweeps = k <= 1 ? 1 : 3;
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    for (int j = 0; j < n; ++j) {
+      bool free = true;  // no t enters axis j: the constraint is |a_j| <= b_j
+      for (int p = 0; p < k; ++p) {
+        const S& nv = nul(j, p);
+        if (nv == 0) continue;
+        free = false;
+        // N_jp t_p lies in a_j +- b_j minus the other terms (interval product over the t box).
+        S restLo = 0, restHi = 0, restMag = 0;
+        for (int o = 0; o < k; ++o) {
+          if (o == p) continue;
+          const S& no = nul(j, o);
+          if (no >= 0) {
+            restLo += no * tlo_[o];
+            restHi += no * thi_[o];
+          } else {
+            restLo += no * thi_[o];
+            restHi += no * tlo_[o];
+          }
+          restMag += abs(no) * std::max(abs(tlo_[o]), abs(thi_[o]));
+        }
+        const S slack = tol * (abs(a_[j]) + b_[j] + restMag);
+        const S lo = a_[j] - b_[j] - restHi - slack, hi = a_[j] + b_[j] - restLo + slack;
+        S tl = (nv > 0 ? lo : hi) / nv, th = (nv > 0 ? hi : lo) / nv;
+        tl -= tol * abs(tl);
+        th += tol * abs(th);
+        if (tl > tlo_[p]) tlo_[p] = tl;
+        if (th < thi_[p]) thi_[p] = th;
+        if (tlo_[p] > thi_[p]) return true;
+      }
+      if (free && abs(a_[j]) - b_[j] > tol * (abs(a_[j]) + b_[j])) return true;
+    }
+  }
+  return false;
+}
+
 // --- Factory -------------------------------------------------------------------------------------
 
 template <class S>
 Bounding<S> createBounding(std::string_view name, const Problem& problem, const Box<S>& domain) {
   if (name == kBoundingNames[0]) return Bounding<S>(std::in_place_index<0>, problem, domain);
   if (name == kBoundingNames[1]) return Bounding<S>(std::in_place_index<1>, problem, domain);
-  throw InputError("unknown bounding '" + std::string(name) + "' (expected bernstein or interval)");
+  if (name == kBoundingNames[2]) return Bounding<S>(std::in_place_index<2>, problem, domain);
+  throw InputError("unknown bounding '" + std::string(name) +
+                   "' (expected bernstein, interval or linearized)");
 }
 
 template class BernsteinBounding<double>;
 template class BernsteinBounding<Mpfr>;
 template class IntervalBounding<double>;
 template class IntervalBounding<Mpfr>;
+template class LinearizedBounding<double>;
+template class LinearizedBounding<Mpfr>;
 template Bounding<double> createBounding<double>(std::string_view, const Problem&,
                                                  const Box<double>&);
 template Bounding<Mpfr> createBounding<Mpfr>(std::string_view, const Problem&, const Box<Mpfr>&);

@@ -90,17 +90,111 @@ class IntervalBounding final {
   mutable std::vector<Interval<S>> x_, mid_, gradient_;
 };
 
+/// Linearised bounding (`linearized`): the Bernstein hull test of every F_i on its own, then,
+/// for boxes that pass it and when m >= 2, a test of the m equations *together* on their
+/// linearisation. In codimension m >= 2 the per-equation tests keep every box that meets each
+/// hypersurface F_i = 0 separately, i.e. a neighbourhood of their pairwise intersections far
+/// from M; the simultaneous test removes most of these.
+///
+/// Derivation. Let X be the box, c its centre, h_j >= |x_j - c_j| on X, J(X) an interval
+/// enclosure of the Jacobian over X (midpoint-radius gradients of the syntax trees; constant
+/// rows for affine equations) and J_c any point matrix (the midpoint of J(X)). By the
+/// mean value theorem, applied to each F_i, every zero x = c + d in X satisfies
+///
+///     J_c d = -g,   g in G := F(c) + [-r, r],   r_i = sum_j mag(J_ij(X) - J_c,ij) h_j,
+///
+/// with F(c) enclosed in interval arithmetic. With J_c^T = Q R (Householder; Q = [Q1 Q2], Q2
+/// spanning ker J_c) put L = R^T (so L L^T = J_c J_c^T) and P = L^{-1}; then P J_c = Q1^T has
+/// orthonormal rows and the box is discarded when one of three necessary conditions fails:
+///  - row test: mig((P G)_i) <= sum_j |(P J_c)_ij| h_j for every i;
+///  - ball test: sum_i mig((P G)_i)^2 <= |P J_c|_2^2 |h|_2^2 (|P J_c|_2 = 1 up to rounding);
+///  - null-space test: with J^+ = Q1 P and N = Q2, d = -J^+ g + N t + D d for t = N^T d and
+///    D = I - J^+ J_c - N N^T (zero up to rounding), so some t must satisfy
+///    |(N t)_j - (J^+ mid G)_j| <= h_j + (|J^+| rad G)_j + (|D| h)_j for every axis j; this
+///    is checked by interval constraint propagation on t (exact when k = n - m = 1: the
+///    linearised curve is a thickened line and the test is whether it meets the box).
+/// The identities hold for the matrices actually computed (P, J^+, N are just some matrices),
+/// and every floating-point product is bounded with the standard error bound gamma_p of
+/// p-term dot products (a relative margin of 8 (n + m + 8) eps on every bound), so rounding
+/// never discards a box that holds a common zero. A rank-deficient J_c (a pivot below 1e-10
+/// of the largest row) skips the test and keeps the box.
+///
+/// F(c) and J(X) come from the equations compiled once to postfix form and evaluated in
+/// midpoint-radius arithmetic (rounding-to-nearest, every rounding error added to the radius):
+/// as rigorous as outward-rounded intervals, without switching rounding modes per operation.
+/// The test is only enabled when it can pay: m <= n and some two equations share a variable
+/// (for equations in disjoint variables, like the Clifford torus, the per-equation tests
+/// already decide the system, and `linearized` is `bernstein`). Scratch buffers make
+/// mayContainZero allocation-free for double: use one instance per thread.
+template <class S>
+class LinearizedBounding final {
+ public:
+  /// Per-box state: the Bernstein state (box and patches), carried down by halving.
+  using State = typename BernsteinBounding<S>::State;
+
+  LinearizedBounding(const Problem& problem, const Box<S>& domain);
+
+  /// Number of variables n.
+  int dim() const { return bernstein_.dim(); }
+  /// State of the whole domain.
+  void root(State& state) const { bernstein_.root(state); }
+  /// Children of `parent` at the midpoint of `axis` (Bernstein halving).
+  void halve(const State& parent, int axis, State& lower, State& upper) const {
+    bernstein_.halve(parent, axis, lower, upper);
+  }
+  /// Alg. 1 step (1): false when a Bernstein hull excludes 0 or, for m >= 2, when the
+  /// linearised system has no solution in the box (see the class comment).
+  bool mayContainZero(const State& state) const;
+
+  /// The simultaneous test alone (for tests): true when the linearised system proves that
+  /// `box` holds no common zero.
+  bool linearizationExcludes(const Box<S>& box) const;
+
+ private:
+  /// One instruction of an equation compiled to postfix form (evaluated on a stack).
+  struct Op {
+    enum Kind { kConst, kVar, kAdd, kSub, kMul, kDiv, kPow, kNeg } kind;
+    int arg = 0;  ///< kVar: variable index; kPow: exponent
+    S mid, rad;   ///< kConst: the literal as midpoint and radius
+  };
+  static void compile(const ExprNode& node, std::vector<Op>& tape, int depth, int& maxDepth);
+  /// Runs `tape` in midpoint-radius arithmetic with every rounding absorbed in the radii;
+  /// variable j is mid c_j, radius `radius[j]`. With `gradient`, slot 0 of the stack ends with
+  /// the value and the n partial derivatives, else with the value only. False when a divisor
+  /// encloses 0 or a value is not finite.
+  bool run(const std::vector<Op>& tape, std::span<const S> radius, bool gradient) const;
+
+  BernsteinBounding<S> bernstein_;
+  std::vector<std::vector<Op>> tapes_;  // per equation
+  std::vector<char> affine_;  // per equation: total degree <= 1, so the gradient is constant
+  int n_ = 0, m_ = 0;
+  bool enabled_ = false;  // some pair of equations shares a variable, and m <= n
+  S tol_;                 // relative margin covering every rounding of the test
+  S u_;                   // unit of the midpoint-radius arithmetic (>= 2 x unit round-off)
+  std::vector<S> affineMid_, affineRad_;  // m x n: constant gradients (affine rows only)
+  // Scratch of linearizationExcludes, sized once (matrices row-major unless noted).
+  mutable std::vector<S> stackMid_, stackRad_;            // evaluation stack, (n + 1) per slot
+  mutable std::vector<S> c_, h_, zero_, jac_, mu_, rho_;  // jac_: m x n
+  mutable std::vector<S> w_, beta_, diag_;           // w_: J_c^T (n x m, column-major), reflectors
+  mutable std::vector<S> q_;                         // n x n orthogonal factor, column-major
+  mutable std::vector<S> p_, pj_, pjAbs_, mig_;      // P (m x m), P J_c and |P| |J_c| (m x n)
+  mutable std::vector<S> pinv_, a_, b_, tlo_, thi_;  // J^+ (n x m), centre/bound per axis, t box
+};
+
 static_assert(BoundingStrategy<BernsteinBounding<double>>);
 static_assert(BoundingStrategy<BernsteinBounding<Mpfr>>);
 static_assert(BoundingStrategy<IntervalBounding<double>>);
 static_assert(BoundingStrategy<IntervalBounding<Mpfr>>);
+static_assert(BoundingStrategy<LinearizedBounding<double>>);
+static_assert(BoundingStrategy<LinearizedBounding<Mpfr>>);
 
 /// The bounding family: one closed variant, dispatched once per subdivision (std::visit).
 template <class S>
-using Bounding = std::variant<BernsteinBounding<S>, IntervalBounding<S>>;
+using Bounding = std::variant<BernsteinBounding<S>, IntervalBounding<S>, LinearizedBounding<S>>;
 
 /// Names accepted by createBounding, in the variant's order.
-inline constexpr std::array<std::string_view, 2> kBoundingNames{"bernstein", "interval"};
+inline constexpr std::array<std::string_view, 3> kBoundingNames{"bernstein", "interval",
+                                                                "linearized"};
 
 /// The bounding strategy called `name` for `problem` on `domain` (the problem domain in S,
 /// jitter applied); throws InputError on an unknown name.
@@ -111,6 +205,8 @@ extern template class BernsteinBounding<double>;
 extern template class BernsteinBounding<Mpfr>;
 extern template class IntervalBounding<double>;
 extern template class IntervalBounding<Mpfr>;
+extern template class LinearizedBounding<double>;
+extern template class LinearizedBounding<Mpfr>;
 extern template Bounding<double> createBounding<double>(std::string_view, const Problem&,
                                                         const Box<double>&);
 extern template Bounding<Mpfr> createBounding<Mpfr>(std::string_view, const Problem&,
