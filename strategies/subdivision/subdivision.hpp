@@ -66,7 +66,7 @@ Subdivision createSubdivision(std::string_view name);
 /// pair of bounding states per depth plus the output, so it grows with the number of solution
 /// cells, not with 2^(n L). `progress`, when set, receives ("subdivision", share of the domain's
 /// volume done) at most about 100 times. Throws InputError when the grid does not fit a CellKey
-/// (`!Grid::fits(n, L)`), std::invalid_argument when grid and bounding disagree on n.
+/// (the packed cell index needs n * L <= 64), std::invalid_argument when grid and bounding disagree on n.
 template <class S>
 SolutionCells subdivide(const Bounding<S>& bounding, const Subdivision& subdivision,
                         const Grid& grid, const Progress& progress = {});
