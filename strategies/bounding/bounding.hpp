@@ -132,6 +132,8 @@ class LinearizedBounding final {
   /// Per-box state: the Bernstein state (box and patches), carried down by halving.
   using State = typename BernsteinBounding<S>::State;
 
+  /// Converts the equations to Bernstein form on `domain` (as BernsteinBounding) and compiles
+  /// them to postfix form for the linearised test.
   LinearizedBounding(const Problem& problem, const Box<S>& domain);
 
   /// Number of variables n.
