@@ -321,6 +321,7 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
   std::vector<std::uint8_t> uncertain(count, 0);
   std::vector<DualCell> duals;
   std::vector<S> rootPoints;  // n per recorded dual cell: the crossing it stands for
+  std::vector<S> orientF(m), orientJ(std::size_t(m) * n);
   FaceSolver<S> solver(in.system, maxFaceDepth);
   std::vector<Bernstein<S>> cellPatches(m), facePatches(m);
   std::vector<std::vector<S>> roots;
@@ -337,6 +338,18 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
       for (int a : axes) --index[a];
       auto it = cells.lookup.find(grid.pack(index));
       return it == cells.lookup.end() ? -1 : it->second;
+    };
+    std::vector<int> faceFree;  // the free axes of the face being solved
+    // Sign of the determinant of the face Jacobian (columns of the free axes) at a root.
+    const auto orientation = [&](const std::vector<S>& r) {
+      in.system.evaluate(r, orientF, orientJ);
+      Matrix<S> j(m, m);
+      for (int row = 0; row < m; ++row) {
+        for (int col = 0; col < m; ++col)
+          j(row, col) = orientJ[std::size_t(row) * n + faceFree[col]];
+      }
+      const S det = Eigen::FullPivLU<Matrix<S>>(j).determinant();
+      return det > 0 ? 1 : (det < 0 ? -1 : 0);
     };
     const auto solveFace = [&](std::initializer_list<int> fixed) {
       if (!restricted) {
@@ -357,14 +370,21 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
         facePatches[i] = cellPatches[i];
         for (int a : order) facePatches[i] = facePatches[i].faceSlice(a, false);
       }
+      faceFree = freeAxes;
       std::vector<S> point(box.lo);
       roots.clear();
       return solver.solve(point, freeAxes, facePatches, closedUpper, roots);
     };
     const auto record = [&](const DualCell& dual) {
-      // The dual complex is built mod 2: two roots on one face are the two ends of a piece
-      // of M that dips through the face and back, and their dual cells cancel.
-      if (roots.size() % 2 == 1) {
+      // The dual complex counts roots with orientation (the sign of the face Jacobian's
+      // determinant, i.e. the local degree): a piece of M that dips through the face and back
+      // gives two roots of opposite sign that cancel, while two strands crossing the face the
+      // same way (a self-intersection) add up and keep the curve connected. The count is
+      // odd exactly when the number of roots is odd, so closedness mod 2 is kept.
+      int degree = 0;
+      for (const auto& r : roots) degree += orientation(r);
+      if (roots.size() % 2 == 1 && degree == 0) degree = 1;  // a root of unknown orientation
+      for (int copy = 0; copy < std::abs(degree); ++copy) {
         DualCell d = dual;
         d.root = static_cast<std::int32_t>(rootPoints.size() / n);
         rootPoints.insert(rootPoints.end(), roots.front().begin(), roots.front().end());
