@@ -11,7 +11,7 @@ namespace ndc {
 /// The strategies and parameters of one run (`settings` in summary.json).
 struct Settings {
   int depth = 6;
-  std::string bounding = "bernstein";
+  std::string bounding = "linearized";
   std::string subdivision = "binary";
   std::string scalar = "double";
   unsigned precisionBits = 53;

@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/build.sh
 bin=build/bin/ndcontour
-depth=${NDC_DEPTH:-5}
+depth=${NDC_DEPTH:-6}
 mkdir -p results
 table=results/summary.md
 {
