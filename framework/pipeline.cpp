@@ -161,6 +161,11 @@ RunResult runPipeline(const Problem& problem, const Settings& settings, const Pr
   }
   if (settings.scalar == "double") return run<double>(problem, settings, progress);
   if (settings.scalar == "mpfr") {
+    // The run's precision applies to this run only: restore the caller's afterwards.
+    struct Restore {
+      unsigned bits = mpfrPrecision();
+      ~Restore() { setMpfrPrecision(bits); }
+    } restore;
     setMpfrPrecision(settings.precisionBits);
     return run<Mpfr>(problem, settings, progress);
   }

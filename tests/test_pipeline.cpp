@@ -1,0 +1,137 @@
+// The whole pipeline (design.md 2, paper Algorithm 1) on known manifolds: every strategy
+// combination runs on every example problem, the cell counts add up, double and MPFR agree on
+// the cells and their classes, and the vertices lie on M to working precision.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "pipeline.hpp"
+#include "problem.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::vector<fs::path> exampleProblems() {
+  std::vector<fs::path> files;
+  for (const auto& entry :
+       fs::directory_iterator(fs::path(ndc::test::sourceDir()) / "experiments" / "problems")) {
+    if (entry.path().extension() == ".toml") files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+ndc::Problem example(const std::string& name) {
+  return ndc::loadProblem(fs::path(ndc::test::sourceDir()) / "experiments" / "problems" /
+                          (name + ".toml"));
+}
+
+}  // namespace
+
+TEST_CASE("pipeline: every strategy combination runs on every example problem",
+          "[pipeline][slow]") {
+  const auto files = exampleProblems();
+  REQUIRE(files.size() >= 8);
+  for (const auto& file : files) {
+    const ndc::Problem problem = ndc::loadProblem(file);
+    for (const char* bounding : {"bernstein", "interval", "linearized"}) {
+      for (const char* subdivision : {"uniform", "binary"}) {
+        for (const char* connection : {"paper", "naive", "crossing"}) {
+          ndc::Settings settings;
+          // Small depths: this checks that every combination runs end to end and that its
+          // counts are consistent, not the quality of the result.
+          settings.depth = problem.n() <= 4 ? 3 : 2;
+          settings.bounding = bounding;
+          settings.subdivision = subdivision;
+          settings.connection = connection;
+          INFO(problem.name << " " << bounding << " " << subdivision << " " << connection);
+          const ndc::Summary s = ndc::runPipeline(problem, settings).summary;
+          CHECK(s.normal + s.abnormal + s.failed == s.solution);
+          CHECK(s.visited >= s.solution);
+          CHECK(s.solution > 0);
+          CHECK(s.mesh.vertices > 0);
+        }
+      }
+    }
+  }
+}
+
+TEMPLATE_TEST_CASE("pipeline: cells add up and vertices lie on M", "[pipeline]", NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(128);
+  const bool mpfr = !std::is_same_v<TestType, double>;
+  for (const char* name : {"circle", "circle-3d", "space-curve-r4", "circle-r5", "sphere",
+                           "clifford-torus", "torus"}) {
+    const ndc::Problem problem = example(name);
+    for (const char* connection : {"paper", "naive", "crossing"}) {
+      ndc::Settings settings;
+      settings.depth = 4;
+      settings.connection = connection;
+      settings.scalar = mpfr ? "mpfr" : "double";
+      settings.precisionBits = 128;
+      INFO(name << " " << connection << " " << settings.scalar);
+      const ndc::RunResult r = ndc::runPipeline(problem, settings);
+      const ndc::Summary& s = r.summary;
+      CHECK(s.normal + s.abnormal + s.failed == s.solution);
+      CHECK(s.failed == 0);
+      CHECK(s.mesh.vertices > 0);
+      CHECK(s.mesh.maxResidual <= (mpfr ? 1e-30 : 1e-10));
+      CHECK(r.cellClass.size() == static_cast<std::size_t>(s.solution));
+    }
+  }
+}
+
+TEST_CASE("pipeline: double and mpfr give the same cells and classes", "[pipeline][mpfr]") {
+  ndc::test::PrecisionScope<ndc::Mpfr> scope(128);
+  for (const char* name : {"circle", "circle-3d", "sphere", "torus", "clifford-torus"}) {
+    const ndc::Problem problem = example(name);
+    // Jitter keeps M off the grid faces (the Clifford torus lies along them otherwise, and
+    // then a point on a cell face is normal or abnormal by a rounding).
+    ndc::Settings settings;
+    settings.depth = 4;
+    settings.jitter = 1;
+    settings.connection = "crossing";
+    const ndc::RunResult d = ndc::runPipeline(problem, settings);
+    settings.scalar = "mpfr";
+    settings.precisionBits = 128;
+    const ndc::RunResult m = ndc::runPipeline(problem, settings);
+    INFO(name);
+    CHECK(d.cellIndex == m.cellIndex);
+    CHECK(d.cellClass == m.cellClass);
+    CHECK(d.summary.mesh.components == m.summary.mesh.components);
+    CHECK(d.summary.mesh.eulerCharacteristic == m.summary.mesh.eulerCharacteristic);
+  }
+}
+
+TEST_CASE("pipeline: the paper connection closes well-resolved curves in R^3..R^6", "[pipeline]") {
+  for (const char* name : {"circle-3d", "space-curve-r4", "circle-r5", "circle-r6"}) {
+    const ndc::Problem problem = example(name);
+    ndc::Settings settings;
+    settings.depth = 5;
+    settings.connection = "paper";
+    INFO(name);
+    const ndc::Summary s = ndc::runPipeline(problem, settings).summary;
+    CHECK(s.mesh.components == 1);
+    CHECK(s.mesh.openEnds == 0);
+    CHECK(s.mesh.branchVertices == 0);
+    CHECK(s.mesh.maxResidual <= 1e-10);
+  }
+}
+
+TEST_CASE("pipeline: bad settings are input errors", "[pipeline]") {
+  const ndc::Problem problem = example("circle");
+  ndc::Settings settings;
+  settings.bounding = "hull";
+  CHECK_THROWS_AS(ndc::runPipeline(problem, settings), ndc::InputError);
+  settings = {};
+  settings.depth = 40;
+  CHECK_THROWS_AS(ndc::runPipeline(problem, settings), ndc::InputError);
+  settings = {};
+  settings.scalar = "float";
+  CHECK_THROWS_AS(ndc::runPipeline(problem, settings), ndc::InputError);
+}
