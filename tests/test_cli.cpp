@@ -284,7 +284,7 @@ TEST_CASE("cli: bench times each stage and rejects bad settings", "[cli]") {
   INFO(run.err);
   CHECK(run.status == 0);
   CHECK(contains(run.out, "| problem | n | k | depth |"));
-  CHECK(contains(run.out, "| p | 2 | 1 | 4 | bernstein | binary | crossing | double |"));
+  CHECK(contains(run.out, "| p | 2 | 1 | 4 | linearized | binary | crossing | double |"));
   checkBadInput(ndcontour("bench " + valid + " --connection mc"), {"--connection", "mc"});
   checkBadInput(ndcontour("bench " + valid + " --repeat 0"), {"--repeat"});
 }
