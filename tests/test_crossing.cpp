@@ -254,11 +254,10 @@ TEST_CASE("crossing: closed curves and surfaces at depth 5 and 6", "[crossing][s
 // face gave two identical dual cells (non-manifold and boundary edges); 8da3b16 emits dual
 // cells mod 2, which fixed the R^6 cases, but the ridge cases still fold (see below).
 
-TEST_CASE("crossing: surfaces in R^6 at depths 4 and 5", "[crossing][slow][!mayfail]") {
-  // Before 8da3b16 (dual cells mod 2), sphere-r6 had 2 boundary and 2 non-manifold edges at
-  // depths 4 and 5 (also with jitter 1, 2): the grid 4-face x4 = -0.3, x5 = 0.375 (cell (21, 6,
-  // 15, 20) in x1, x2, x3, x6 at depth 5) holds both points of M on that 2-plane, 0.028 apart;
-  // torus-r6 had 2 and 2 at depth 4. They pass since.
+TEST_CASE("crossing: surfaces in R^6 at depths 4 and 5", "[crossing][slow]") {
+  // The grid 4-face x4 = -0.3, x5 = 0.375 (cell (21, 6, 15, 20) in x1, x2, x3, x6 at depth 5)
+  // holds both points of sphere-r6 on that 2-plane, 0.028 apart: their dual cells must cancel
+  // (they did not before the mod-2 rule: 2 boundary and 2 non-manifold edges).
   checkCases<double>({
       {"sphere-r6", example("sphere-r6"), 4, {}, 1, 2},
       {"sphere-r6", example("sphere-r6"), 5, {}, 1, 2},
@@ -372,10 +371,11 @@ TEMPLATE_TEST_CASE("crossing: Viviani's curve reports its double point", "[cross
   }
 }
 
-// Since 8da3b16 (a vertex per link component) the cell at the double point is split into two
-// vertices; with jitter 2 (depths 4, 5, 6) the strands are paired into two loops: 2 components.
-TEMPLATE_TEST_CASE("crossing: Viviani's curve stays one component (jitter 2)",
-                   "[crossing][!mayfail]", NDC_SCALARS) {
+// With jitter 2 the two strands near the double point cross one grid face with opposite
+// orientation; cancelling them (as for a dip) cut the curve into two loops. Roots where the
+// Jacobian is nearly rank-deficient are kept instead.
+TEMPLATE_TEST_CASE("crossing: Viviani's curve stays one component (jitter 2)", "[crossing]",
+                   NDC_SCALARS) {
   checkViviani<TestType>(2);
 }
 

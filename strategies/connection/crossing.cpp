@@ -351,6 +351,16 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
       const S det = Eigen::FullPivLU<Matrix<S>>(j).determinant();
       return det > 0 ? 1 : (det < 0 ? -1 : 0);
     };
+    // Whether the full Jacobian at a root is nearly rank-deficient (sigma_min < 0.1 sigma_max).
+    const auto nearSingular = [&](const std::vector<S>& r) {
+      in.system.evaluate(r, orientF, orientJ);
+      Matrix<S> j(m, n);
+      for (int row = 0; row < m; ++row) {
+        for (int col = 0; col < n; ++col) j(row, col) = orientJ[std::size_t(row) * n + col];
+      }
+      const auto sigma = Eigen::JacobiSVD<Matrix<S>>(j).singularValues();
+      return sigma(m - 1) < sigma(0) / 10;
+    };
     const auto solveFace = [&](std::initializer_list<int> fixed) {
       if (!restricted) {
         for (int i = 0; i < m; ++i) cellPatches[i] = rootPatches[i].restrict(box);
@@ -384,6 +394,13 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
       int degree = 0;
       for (const auto& r : roots) degree += orientation(r);
       if (roots.size() % 2 == 1 && degree == 0) degree = 1;  // a root of unknown orientation
+      // Near a singular point (self-intersection) the orientation of M is undefined and two
+      // strands may cross one face with opposite signs: keep them all rather than cut M.
+      if (roots.size() >= 2 && std::abs(degree) < static_cast<int>(roots.size()) &&
+          std::any_of(roots.begin(), roots.end(), nearSingular)) {
+        degree = static_cast<int>(roots.size());
+        for (int i = 0; i < (k == 1 ? 2 : 4); ++i) uncertain[dual.cells[i]] = 1;
+      }
       for (int copy = 0; copy < std::abs(degree); ++copy) {
         DualCell d = dual;
         d.root = static_cast<std::int32_t>(rootPoints.size() / n);
