@@ -279,6 +279,25 @@ class FaceSolver {
   bool certain_ = true;
 };
 
+/// The m x n Jacobian of the system at x.
+template <class S>
+Matrix<S> jacobianAt(const System<S>& system, std::span<const S> x) {
+  const int m = system.m(), n = system.n();
+  std::vector<S> f(m), j(std::size_t(m) * n);
+  system.evaluate(x, f, j);
+  Matrix<S> out(m, n);
+  for (int r = 0; r < m; ++r) {
+    for (int c = 0; c < n; ++c) out(r, c) = j[std::size_t(r) * n + c];
+  }
+  return out;
+}
+
+/// Singular values of the Jacobian at x, largest first.
+template <class S>
+Vector<S> singularValuesAt(const System<S>& system, std::span<const S> x) {
+  return Eigen::JacobiSVD<Matrix<S>>(jacobianAt(system, x)).singularValues();
+}
+
 /// A dual k-cell: the 2^k cells around a crossed m-face, in cyclic order (k = 2).
 struct DualCell {
   std::array<std::int32_t, 4> cells{-1, -1, -1, -1};
@@ -321,7 +340,6 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
   std::vector<std::uint8_t> uncertain(count, 0);
   std::vector<DualCell> duals;
   std::vector<S> rootPoints;  // n per recorded dual cell: the crossing it stands for
-  std::vector<S> orientF(m), orientJ(std::size_t(m) * n);
   FaceSolver<S> solver(in.system, maxFaceDepth);
   std::vector<Bernstein<S>> cellPatches(m), facePatches(m);
   std::vector<std::vector<S>> roots;
@@ -342,23 +360,15 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
     std::vector<int> faceFree;  // the free axes of the face being solved
     // Sign of the determinant of the face Jacobian (columns of the free axes) at a root.
     const auto orientation = [&](const std::vector<S>& r) {
-      in.system.evaluate(r, orientF, orientJ);
+      const Matrix<S> full = jacobianAt<S>(in.system, r);
       Matrix<S> j(m, m);
-      for (int row = 0; row < m; ++row) {
-        for (int col = 0; col < m; ++col)
-          j(row, col) = orientJ[std::size_t(row) * n + faceFree[col]];
-      }
+      for (int col = 0; col < m; ++col) j.col(col) = full.col(faceFree[col]);
       const S det = Eigen::FullPivLU<Matrix<S>>(j).determinant();
       return det > 0 ? 1 : (det < 0 ? -1 : 0);
     };
     // Whether the full Jacobian at a root is nearly rank-deficient (sigma_min < 0.1 sigma_max).
     const auto nearSingular = [&](const std::vector<S>& r) {
-      in.system.evaluate(r, orientF, orientJ);
-      Matrix<S> j(m, n);
-      for (int row = 0; row < m; ++row) {
-        for (int col = 0; col < n; ++col) j(row, col) = orientJ[std::size_t(row) * n + col];
-      }
-      const auto sigma = Eigen::JacobiSVD<Matrix<S>>(j).singularValues();
+      const Vector<S> sigma = singularValuesAt<S>(in.system, r);
       return sigma(m - 1) < sigma(0) / 10;
     };
     const auto solveFace = [&](std::initializer_list<int> fixed) {
@@ -516,7 +526,7 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
 
   // Dual vertices: the Newton projection of the mean of each piece's crossings.
   std::vector<std::int32_t> firstVertex(count, -1);
-  std::vector<S> sums, x(n), f(m), jacobian(std::size_t(m) * n);
+  std::vector<S> sums, x(n);
   std::vector<std::int32_t> counts;
   const S widest = S(grid.cellWidth(0));
   for (std::size_t c = 0; c < count; ++c) {
@@ -537,13 +547,7 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
       if (p == 0) firstVertex[c] = v;
       // Singular cells: the Jacobian at the vertex is (nearly) rank-deficient relative to the
       // cell size, as at self-intersections and cone points.
-      in.system.evaluate(x, f, jacobian);
-      Matrix<S> j(m, n);
-      for (int r = 0; r < m; ++r) {
-        for (int col = 0; col < n; ++col) j(r, col) = jacobian[std::size_t(r) * n + col];
-      }
-      Eigen::JacobiSVD<Matrix<S>> svd(j);
-      const auto& sigma = svd.singularValues();
+      const Vector<S> sigma = singularValuesAt<S>(in.system, x);
       if (p == 0 && (uncertain[c] || sigma(0) == 0 || sigma(m - 1) <= sigma(0) * widest * 1e-3)) {
         ++out.singularCells;
       }
