@@ -26,7 +26,7 @@ for problem in experiments/problems/*.toml; do
   if "$bin" solve "$problem" --depth "$depth" --connection crossing --jitter 1 --out "$out" \
       > "$out/solve.log" 2>&1; then
     s="$out/summary.json"
-    row="| $name | $(json n "$s") | $(json k "$s") | $(json components "$s") ($(expect components "$problem")) | $(json euler_characteristic "$s") ($(expect euler_characteristic "$problem")) | $(json boundary_edges "$s") | $(json nonmanifold_edges "$s") | $(json open_ends "$s") | $(json max_residual "$s") | $(json total "$s") |"
+    row="| $name | $(json n "$s") | $(json k "$s") | $(json components "$s") ($(expect components "$problem")) | $(json euler_characteristic "$s") ($(expect euler_characteristic "$problem")) | $(json boundary_edges "$s") | $(json nonmanifold_edges "$s") | $(json open_ends "$s") | $(printf '%.1e' "$(json max_residual "$s")") | $(printf '%.3f' "$(json total "$s")") |"
     echo "$row" >> "$table"
     echo "solved $name"
   else
