@@ -265,6 +265,16 @@ class Validator {
       bool constant = true;
       for (int d : e.degrees()) constant = constant && d == 0;
       if (constant) fail(node, what + " is constant (it uses no variable): '" + source + "'");
+      // The Bernstein form has prod (d_j + 1) coefficients per box and level: refuse sizes that
+      // would exhaust memory instead of allocating without bound.
+      double coefficients = 1;
+      for (int d : e.degrees()) coefficients *= d + 1.0;
+      if (coefficients > kMaxCoefficients) {
+        std::ostringstream message;
+        message << what << " needs " << coefficients << " Bernstein coefficients (the product of "
+                << "its degrees + 1); at most " << kMaxCoefficients << " are supported";
+        fail(node, message.str());
+      }
       return e;
     } catch (const ExpressionError& error) {
       // Map the expression column to the file through the string's source position.

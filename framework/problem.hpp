@@ -50,6 +50,10 @@ struct Problem {
   Box<S> domainAs() const;
 };
 
+/// Largest number of Bernstein coefficients (product of degree + 1 over the variables) an
+/// equation may have; larger ones are rejected as bad input rather than exhausting memory.
+inline constexpr double kMaxCoefficients = 1e6;
+
 /// Reads and validates a problem file; throws InputError.
 Problem loadProblem(const std::filesystem::path& file);
 /// Parses and validates problem text (`file` is used in messages); throws InputError.

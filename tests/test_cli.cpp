@@ -288,3 +288,15 @@ TEST_CASE("cli: bench times each stage and rejects bad settings", "[cli]") {
   checkBadInput(ndcontour("bench " + valid + " --connection mc"), {"--connection", "mc"});
   checkBadInput(ndcontour("bench " + valid + " --repeat 0"), {"--repeat"});
 }
+
+TEST_CASE("cli: an equation too large for memory is bad input, not a crash", "[cli]") {
+  const std::string big =
+      quoted(writeProblem("big.toml",
+                          "name = \"big\"\nvariables = [\"x\", \"y\", \"z\", \"w\"]\n"
+                          "domain = [[-1, 1], [-1, 1], [-1, 1], [-1, 1]]\n"
+                          "equations = [\"(x*y*z*w)^3000 - 1\"]\n")
+                 .string());
+  checkBadInput(ndcontour("solve " + big + " --depth 2"),
+                {"big.toml:4:", "equation 1", "Bernstein coefficients", "at most"});
+  checkBadInput(ndcontour("info " + big), {"Bernstein coefficients"});
+}
