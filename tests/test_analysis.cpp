@@ -15,20 +15,7 @@
 namespace {
 
 using ndc::toDouble;
-
-/// A problem in variables x0..x{n-1} on [-2, 2]^n.
-ndc::Problem makeProblem(int n, const std::vector<std::string>& equations) {
-  std::string text = "name = \"test\"\nvariables = [";
-  for (int j = 0; j < n; ++j) text += (j ? ", \"x" : "\"x") + std::to_string(j) + "\"";
-  text += "]\ndomain = [";
-  for (int j = 0; j < n; ++j) text += j ? ", [-2, 2]" : "[-2, 2]";
-  text += "]\nequations = [";
-  for (std::size_t i = 0; i < equations.size(); ++i) {
-    text += (i ? ", \"" : "\"") + equations[i] + "\"";
-  }
-  text += "]\n";
-  return ndc::parseProblem(text, "test");
-}
+using ndc::test::makeProblem;
 
 /// A complex from double coordinates and vertex numbers.
 template <class S>
@@ -73,7 +60,7 @@ void addPolyline(std::vector<std::vector<std::int32_t>>& segments, int first, in
 TEMPLATE_TEST_CASE("Topology of hand-built polylines", "[analysis]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
   using S = TestType;
-  const ndc::Problem problem = makeProblem(2, {"x0^2 + x1^2 - 1"});
+  const ndc::Problem problem = makeProblem(2, {"x0^2 + x1^2 - 1"}, 2);
   const ndc::System<S> system(problem);
 
   SECTION("closed polygon") {
@@ -138,7 +125,7 @@ TEMPLATE_TEST_CASE("Topology of hand-built polylines", "[analysis]", NDC_SCALARS
 TEMPLATE_TEST_CASE("Topology of hand-built triangle meshes", "[analysis]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
   using S = TestType;
-  const ndc::Problem sphere = makeProblem(3, {"x0^2 + x1^2 + x2^2 - 1"});
+  const ndc::Problem sphere = makeProblem(3, {"x0^2 + x1^2 + x2^2 - 1"}, 2);
   const ndc::System<S> system(sphere);
 
   SECTION("octahedron") {
@@ -188,7 +175,7 @@ TEMPLATE_TEST_CASE("A triangulated Clifford torus has chi = 0", "[analysis]", ND
   using std::cos;
   using std::sin;
   using std::sqrt;
-  const ndc::Problem problem = makeProblem(4, {"x0^2 + x1^2 - 0.5", "x2^2 + x3^2 - 0.5"});
+  const ndc::Problem problem = makeProblem(4, {"x0^2 + x1^2 - 0.5", "x2^2 + x3^2 - 0.5"}, 2);
   const ndc::System<S> system(problem);
   const int rows = 6, cols = 8;
   const S pi = acos(S(-1));
@@ -231,7 +218,7 @@ TEMPLATE_TEST_CASE("Welding merges duplicate vertices within tolerance", "[analy
                    NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
   using S = TestType;
-  const ndc::Problem sphere = makeProblem(3, {"x0^2 + x1^2 + x2^2 - 1"});
+  const ndc::Problem sphere = makeProblem(3, {"x0^2 + x1^2 + x2^2 - 1"}, 2);
   const ndc::System<S> system(sphere);
   std::mt19937 rng(23);
   std::uniform_real_distribution<double> jiggle(-1e-13, 1e-13);
@@ -343,7 +330,7 @@ TEMPLATE_TEST_CASE("Residual and chord error of a polygon inscribed in the unit 
   using std::acos;
   using std::cos;
   using std::sin;
-  const ndc::Problem problem = makeProblem(2, {"x0^2 + x1^2 - 1"});
+  const ndc::Problem problem = makeProblem(2, {"x0^2 + x1^2 - 1"}, 2);
   const ndc::System<S> system(problem);
   const ndc::Projection<S> projection = ndc::createProjection<S>("newton", system);
   const S pi = acos(S(-1));

@@ -27,7 +27,8 @@ using ndc::test::PrecisionScope;
 using ndc::test::relativeTolerance;
 using ndc::test::uniform;
 
-constexpr unsigned kExactBits = 2000;
+using ndc::test::exact;
+using ndc::test::kExactBits;
 
 // Variable names: x, y, z up to three variables, x1..xn beyond.
 std::vector<std::string> names(int n) {
@@ -48,20 +49,6 @@ bool close(const S& a, const S& b, double scale) {
   using std::abs;
   S diff = abs(S(a - b));
   return diff <= S(relativeTolerance<S>() * std::max(1.0, scale));
-}
-
-// An exact 2000-bit copy of a scalar.
-Mpfr exact(const double& v) {
-  Mpfr r;
-  mpfr_set_prec(r.backend().data(), kExactBits);
-  mpfr_set_d(r.backend().data(), v, MPFR_RNDN);
-  return r;
-}
-Mpfr exact(const Mpfr& v) {
-  Mpfr r;
-  mpfr_set_prec(r.backend().data(), kExactBits);
-  mpfr_set(r.backend().data(), v.backend().data(), MPFR_RNDN);
-  return r;
 }
 
 // The value and gradient at x in 2000-bit MPFR: the literals and every operation are exact to

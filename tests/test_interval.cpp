@@ -18,21 +18,8 @@ using ndc::toDouble;
 using ndc::test::PrecisionScope;
 using ndc::test::uniform;
 
-constexpr unsigned kExactBits = 2000;
-
-// An exact 2000-bit copy of a scalar (arithmetic on two such copies is done at 2000 bits).
-Mpfr exact(const double& v) {
-  Mpfr r;
-  mpfr_set_prec(r.backend().data(), kExactBits);
-  mpfr_set_d(r.backend().data(), v, MPFR_RNDN);
-  return r;
-}
-Mpfr exact(const Mpfr& v) {
-  Mpfr r;
-  mpfr_set_prec(r.backend().data(), kExactBits);
-  mpfr_set(r.backend().data(), v.backend().data(), MPFR_RNDN);
-  return r;
-}
+using ndc::test::exact;
+using ndc::test::kExactBits;
 
 // The exact value of a short decimal literal (2000 bits hold it to ~600 digits).
 Mpfr exactLiteral(const char* literal) {

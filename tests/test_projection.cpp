@@ -15,22 +15,7 @@
 namespace {
 
 using ndc::toDouble;
-
-/// A problem in variables x0..x{n-1} on [-lo, lo]^n.
-ndc::Problem makeProblem(int n, const std::vector<std::string>& equations, double half = 3) {
-  std::string text = "name = \"test\"\nvariables = [";
-  for (int j = 0; j < n; ++j) text += (j ? ", \"x" : "\"x") + std::to_string(j) + "\"";
-  text += "]\ndomain = [";
-  for (int j = 0; j < n; ++j) {
-    text += (j ? ", [" : "[") + std::to_string(-half) + ", " + std::to_string(half) + "]";
-  }
-  text += "]\nequations = [";
-  for (std::size_t i = 0; i < equations.size(); ++i) {
-    text += (i ? ", \"" : "\"") + equations[i] + "\"";
-  }
-  text += "]\n";
-  return ndc::parseProblem(text, "test");
-}
+using ndc::test::makeProblem;
 
 /// Residual the tests demand at converged points: 1e-10 in double, 1e-30 in MPFR at 128 bits.
 template <class S>
