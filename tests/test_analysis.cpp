@@ -168,6 +168,7 @@ TEMPLATE_TEST_CASE("Topology of hand-built triangle meshes", "[analysis]", NDC_S
   }
 }
 
+//! [analysis-clifford]
 TEMPLATE_TEST_CASE("A triangulated Clifford torus has chi = 0", "[analysis]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
   using S = TestType;
@@ -213,6 +214,7 @@ TEMPLATE_TEST_CASE("A triangulated Clifford torus has chi = 0", "[analysis]", ND
   CHECK(stats.maxChordError > 0.01);
   CHECK(stats.maxChordError < 0.2);
 }
+//! [analysis-clifford]
 
 TEMPLATE_TEST_CASE("Welding merges duplicate vertices within tolerance", "[analysis]",
                    NDC_SCALARS) {
@@ -323,6 +325,7 @@ TEMPLATE_TEST_CASE("Welding merges duplicate vertices within tolerance", "[analy
   }
 }
 
+//! [analysis-chord]
 TEMPLATE_TEST_CASE("Residual and chord error of a polygon inscribed in the unit circle",
                    "[analysis]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
@@ -367,3 +370,4 @@ TEMPLATE_TEST_CASE("Residual and chord error of a polygon inscribed in the unit 
     CHECK(stats.maxChordError == 0.0);
   }
 }
+//! [analysis-chord]

@@ -201,6 +201,7 @@ TEMPLATE_TEST_CASE("coefficient layout and multi-index access", "[bernstein]", N
   CHECK(std::as_const(p).coefficient(idx) == 7);
 }
 
+//! [bernstein-halve]
 TEMPLATE_TEST_CASE("split and halve reproduce the polynomial on both halves", "[bernstein]",
                    NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(160);
@@ -232,6 +233,7 @@ TEMPLATE_TEST_CASE("split and halve reproduce the polynomial on both halves", "[
       }
   }
 }
+//! [bernstein-halve]
 
 TEMPLATE_TEST_CASE("split and halve reuse the output storage", "[bernstein]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(160);
@@ -423,6 +425,7 @@ TEMPLATE_TEST_CASE("elevate keeps values; embed maps variables", "[bernstein]", 
   }
 }
 
+//! [bernstein-hull]
 TEMPLATE_TEST_CASE("coefficient range encloses the restriction; excludesZero agrees", "[bernstein]",
                    NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(160);
@@ -470,6 +473,7 @@ TEMPLATE_TEST_CASE("coefficient range encloses the restriction; excludesZero agr
   CHECK(excluded > 0);
   CHECK(notExcluded > 0);
 }
+//! [bernstein-hull]
 
 TEMPLATE_TEST_CASE("faceSlice fixes an axis at its lower or upper end", "[bernstein]",
                    NDC_SCALARS) {

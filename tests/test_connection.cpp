@@ -323,6 +323,7 @@ Scene<S> circleScene(const Circles& circles, int depth) {
 
 }  // namespace
 
+//! [connection-names]
 TEST_CASE("createConnection names and errors", "[connection]") {
   CHECK(std::holds_alternative<PaperConnection>(createConnection("paper")));
   CHECK(std::holds_alternative<NaiveConnection>(createConnection("naive")));
@@ -331,7 +332,9 @@ TEST_CASE("createConnection names and errors", "[connection]") {
                     "unknown connection 'x' (expected paper, naive or crossing)");
   CHECK(kConnectionNames.size() == 3);
 }
+//! [connection-names]
 
+//! [paper-circle]
 TEMPLATE_TEST_CASE("paper connection closes a circle in R^n", "[connection]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
   const int n = GENERATE(2, 3, 4, 5, 6);
@@ -355,6 +358,7 @@ TEMPLATE_TEST_CASE("paper connection closes a circle in R^n", "[connection]", ND
     CHECK(toDouble(scene.system.maxResidual(out.complex.vertex(v))) < 1e-10);
   }
 }
+//! [paper-circle]
 
 TEMPLATE_TEST_CASE("paper connection keeps two circles apart", "[connection]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
@@ -369,6 +373,7 @@ TEMPLATE_TEST_CASE("paper connection keeps two circles apart", "[connection]", N
   CHECK(t.vertices == t.edges);
 }
 
+//! [naive-thick]
 TEMPLATE_TEST_CASE("naive connection is a thick volume", "[connection]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
   long thick = 0;
@@ -383,7 +388,9 @@ TEMPLATE_TEST_CASE("naive connection is a thick volume", "[connection]", NDC_SCA
   }
   CHECK(thick > 0);
 }
+//! [naive-thick]
 
+//! [paper-grid-vertex]
 TEMPLATE_TEST_CASE("paper connection bridges a circle through a grid vertex", "[connection]",
                    NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
@@ -438,7 +445,9 @@ TEMPLATE_TEST_CASE("paper connection bridges a circle through a grid vertex", "[
   const Topology naive = topology(connect(createConnection("naive"), scene.input()).complex);
   CHECK(naive.branches > 0);
 }
+//! [paper-grid-vertex]
 
+//! [paper-sphere]
 TEMPLATE_TEST_CASE("paper connection on a sphere (k = 2)", "[connection]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
   const int depth = 4;
@@ -468,6 +477,7 @@ TEMPLATE_TEST_CASE("paper connection on a sphere (k = 2)", "[connection]", NDC_S
   CHECK(t.components == 1);
   CHECK(t.triangles > 100);
 }
+//! [paper-sphere]
 
 TEMPLATE_TEST_CASE("paper connection closes many circles", "[connection][slow]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);

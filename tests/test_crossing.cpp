@@ -124,6 +124,7 @@ RunResult run(const Problem& problem, int depth, std::optional<std::uint64_t> ji
 }
 
 /// A closed manifold: the exact topology, no defects, vertices on M.
+//! [crossing-closed]
 template <class S>
 void checkClosed(const RunResult& r, long components, long euler) {
   const auto& m = r.summary.mesh;
@@ -140,6 +141,7 @@ void checkClosed(const RunResult& r, long components, long euler) {
   }
   CHECK(m.maxResidual <= residualBound<S>());
 }
+//! [crossing-closed]
 
 struct Case {
   std::string label;
@@ -199,6 +201,7 @@ long graphComponents(const std::vector<std::pair<std::int32_t, std::int32_t>>& e
 
 // --- Closed curves (k = 1) in R^2 .. R^6 -------------------------------------------------------
 
+//! [crossing-curves]
 TEMPLATE_TEST_CASE("crossing: closed curves in R^2..R^6", "[crossing]", NDC_SCALARS) {
   checkCases<TestType>({
       {"circle (R^2)", example("circle"), 5, {}, 1, 0},
@@ -210,9 +213,11 @@ TEMPLATE_TEST_CASE("crossing: closed curves in R^2..R^6", "[crossing]", NDC_SCAL
       {"circle-r6 (R^6)", example("circle-r6"), 4, {}, 1, 0},
   });
 }
+//! [crossing-curves]
 
 // --- Closed surfaces (k = 2) in R^3 and R^4 ------------------------------------------------------
 
+//! [crossing-surfaces]
 TEMPLATE_TEST_CASE("crossing: closed surfaces in R^3 and R^4", "[crossing]", NDC_SCALARS) {
   checkCases<TestType>({
       {"sphere (R^3)", example("sphere"), 4, {}, 1, 2},
@@ -224,6 +229,7 @@ TEMPLATE_TEST_CASE("crossing: closed surfaces in R^3 and R^4", "[crossing]", NDC
       {"torus-r4 (graph over the ring torus)", inlineProblem(kTorusR4, "torus-r4"), 4, {}, 1, 0},
   });
 }
+//! [crossing-surfaces]
 
 TEST_CASE("crossing: closed curves and surfaces at depth 5 and 6", "[crossing][slow]") {
   checkCases<double>({

@@ -34,6 +34,7 @@ ndc::Problem example(const std::string& name) {
 
 }  // namespace
 
+//! [pipeline-every-strategy]
 TEST_CASE("pipeline: every strategy combination runs on every example problem",
           "[pipeline][slow]") {
   const auto files = exampleProblems();
@@ -61,7 +62,9 @@ TEST_CASE("pipeline: every strategy combination runs on every example problem",
     }
   }
 }
+//! [pipeline-every-strategy]
 
+//! [pipeline-cells-add-up]
 TEMPLATE_TEST_CASE("pipeline: cells add up and vertices lie on M", "[pipeline]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
   const bool mpfr = !std::is_same_v<TestType, double>;
@@ -85,6 +88,7 @@ TEMPLATE_TEST_CASE("pipeline: cells add up and vertices lie on M", "[pipeline]",
     }
   }
 }
+//! [pipeline-cells-add-up]
 
 TEST_CASE("pipeline: double and mpfr give the same cells and classes", "[pipeline][mpfr]") {
   ndc::test::PrecisionScope<ndc::Mpfr> scope(128);
@@ -108,6 +112,7 @@ TEST_CASE("pipeline: double and mpfr give the same cells and classes", "[pipelin
   }
 }
 
+//! [pipeline-paper-curves]
 TEST_CASE("pipeline: the paper connection closes well-resolved curves in R^3..R^6", "[pipeline]") {
   for (const char* name : {"circle-3d", "space-curve-r4", "circle-r5", "circle-r6"}) {
     const ndc::Problem problem = example(name);
@@ -122,6 +127,7 @@ TEST_CASE("pipeline: the paper connection closes well-resolved curves in R^3..R^
     CHECK(s.mesh.maxResidual <= 1e-10);
   }
 }
+//! [pipeline-paper-curves]
 
 TEST_CASE("pipeline: bad settings are input errors", "[pipeline]") {
   const ndc::Problem problem = example("circle");

@@ -94,6 +94,7 @@ TEMPLATE_TEST_CASE("Newton projects onto the circle and sphere radially", "[proj
   }
 }
 
+//! [newton-nearest]
 TEMPLATE_TEST_CASE("Newton from (2, 0) lands on the nearest point (1, 0)", "[projection]",
                    NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
@@ -118,6 +119,7 @@ TEMPLATE_TEST_CASE("Newton from (2, 0) lands on the nearest point (1, 0)", "[pro
   CHECK(stay.iterations == 0);
   CHECK(onCircle == before);
 }
+//! [newton-nearest]
 
 TEMPLATE_TEST_CASE("Newton converges onto a torus in R^3", "[projection]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
@@ -203,6 +205,7 @@ TEMPLATE_TEST_CASE("Newton converges onto a circle in R^8", "[projection]", NDC_
   }
 }
 
+//! [newton-failed]
 TEMPLATE_TEST_CASE("Newton reports non-convergence", "[projection]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
   using S = TestType;
@@ -241,6 +244,7 @@ TEMPLATE_TEST_CASE("Newton reports non-convergence", "[projection]", NDC_SCALARS
     CHECK(x[1] == S(0.3));
   }
 }
+//! [newton-failed]
 
 TEMPLATE_TEST_CASE("The residual tolerance scales with the precision and the terms", "[projection]",
                    NDC_SCALARS) {
@@ -316,6 +320,7 @@ TEMPLATE_TEST_CASE("createProjection and projectCells", "[projection]", NDC_SCAL
   }
 }
 
+//! [classification-paper]
 TEMPLATE_TEST_CASE("Paper classification of known points", "[classification]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
   using S = TestType;
@@ -341,7 +346,9 @@ TEMPLATE_TEST_CASE("Paper classification of known points", "[classification]", N
   CHECK(classify({S(0.5), S(0), S(3)}, false) == CellClass::kFailed);
   CHECK(classify({S(9), S(9), S(9)}, false) == CellClass::kFailed);
 }
+//! [classification-paper]
 
+//! [classify-cells]
 TEMPLATE_TEST_CASE("classifyCells labels a grid from its projections", "[classification]",
                    NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
@@ -377,3 +384,4 @@ TEMPLATE_TEST_CASE("classifyCells labels a grid from its projections", "[classif
   CHECK(classes[1] == ndc::CellClass::kAbnormal);
   CHECK(classes[2] == ndc::CellClass::kFailed);
 }
+//! [classify-cells]

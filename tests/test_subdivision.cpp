@@ -151,6 +151,7 @@ Manifold clifford() {
           }};
 }
 
+//! [subdivide-by-name]
 template <class S>
 SolutionCells solve(const Problem& problem, const char* bounding, const char* subdivision,
                     int depth, const ndc::Progress& progress = {}) {
@@ -159,6 +160,7 @@ SolutionCells solve(const Problem& problem, const char* bounding, const char* su
   const ndc::Bounding<S> b = ndc::createBounding<S>(bounding, problem, domain);
   return ndc::subdivide<S>(b, ndc::createSubdivision(subdivision), grid, progress);
 }
+//! [subdivide-by-name]
 
 std::set<CellKey> keys(const SolutionCells& cells) {
   std::set<CellKey> out;
@@ -237,6 +239,7 @@ std::vector<Case> cases() {
 
 }  // namespace
 
+//! [subdivision-conservative]
 TEMPLATE_TEST_CASE("subdivision keeps every cell the manifold meets", "[subdivision]",
                    NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
@@ -258,7 +261,9 @@ TEMPLATE_TEST_CASE("subdivision keeps every cell the manifold meets", "[subdivis
     }
   }
 }
+//! [subdivision-conservative]
 
+//! [uniform-vs-binary]
 TEMPLATE_TEST_CASE("uniform and binary subdivision give the same solution cells", "[subdivision]",
                    NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
@@ -286,6 +291,7 @@ TEMPLATE_TEST_CASE("uniform and binary subdivision give the same solution cells"
     }
   }
 }
+//! [uniform-vs-binary]
 
 TEMPLATE_TEST_CASE("bernstein and interval bounding are both supersets of the true cells",
                    "[subdivision]", NDC_SCALARS) {
@@ -435,6 +441,7 @@ TEMPLATE_TEST_CASE("subdivision edge cases", "[subdivision]", NDC_SCALARS) {
   }
 }
 
+//! [strategy-names]
 TEST_CASE("unknown strategy names are input errors", "[subdivision]") {
   const Manifold circle = circle2();
   const ndc::Box<double> domain = circle.problem.domainAs<double>();
@@ -453,6 +460,7 @@ TEST_CASE("unknown strategy names are input errors", "[subdivision]") {
   CHECK(std::holds_alternative<ndc::UniformSubdivision>(ndc::createSubdivision("uniform")));
   CHECK(std::holds_alternative<ndc::BinarySubdivision>(ndc::createSubdivision("binary")));
 }
+//! [strategy-names]
 
 TEST_CASE("deeper subdivisions stay conservative and strategy-independent", "[subdivision][slow]") {
   for (const Case& c : {Case{torus(), 7}, Case{clifford(), 6}, Case{circle6(), 5, 200}}) {
@@ -517,6 +525,7 @@ TEMPLATE_TEST_CASE("linearized bounding is conservative and inside bernstein's c
   }
 }
 
+//! [linearized-tighter]
 TEST_CASE("linearized bounding is much tighter on the circle in R^6", "[subdivision]") {
   // Measured (binary): depth 3: bernstein 2505 cells (23647 visited), linearized 146 (3441),
   // i.e. 17x fewer cells; depth 4: 5534 (77387) against 170 (6091), 33x.
@@ -532,6 +541,7 @@ TEST_CASE("linearized bounding is much tighter on the circle in R^6", "[subdivis
     }
   }
 }
+//! [linearized-tighter]
 
 TEST_CASE("linearized test never discards a box around a point of the manifold", "[subdivision]") {
   // Boxes of widths from 1 down to 1e-13 around sampled points of the circles in R^6 and R^8,

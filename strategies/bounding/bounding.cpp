@@ -68,6 +68,7 @@ void BernsteinBounding<S>::halve(const State& parent, int axis, State& lower, St
     parent.patches[i].halve(axis, lower.patches[i], upper.patches[i]);
 }
 
+//! [bernstein-test]
 template <class S>
 bool BernsteinBounding<S>::mayContainZero(const State& state) const {
   // Alg. 1 step (1): discard the box if a Bernstein hull excludes 0.
@@ -75,6 +76,7 @@ bool BernsteinBounding<S>::mayContainZero(const State& state) const {
     if (patch.excludesZero()) return false;
   return true;
 }
+//! [bernstein-test]
 
 // --- IntervalBounding ----------------------------------------------------------------------------
 
@@ -632,6 +634,7 @@ bool LinearizedBounding<S>::linearizationExcludes(const Box<S>& box) const {
 
 // --- Factory -------------------------------------------------------------------------------------
 
+//! [bounding-factory]
 template <class S>
 Bounding<S> createBounding(std::string_view name, const Problem& problem, const Box<S>& domain) {
   if (name == kBoundingNames[0]) return Bounding<S>(std::in_place_index<0>, problem, domain);
@@ -640,6 +643,7 @@ Bounding<S> createBounding(std::string_view name, const Problem& problem, const 
   throw InputError("unknown bounding '" + std::string(name) +
                    "' (expected bernstein, interval or linearized)");
 }
+//! [bounding-factory]
 
 template class BernsteinBounding<double>;
 template class BernsteinBounding<Mpfr>;

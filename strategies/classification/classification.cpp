@@ -6,6 +6,7 @@
 
 namespace ndc {
 
+//! [classification-factory]
 Classification createClassification(std::string_view name) {
   if (name == "paper") return PaperClassification{};
   std::string known;
@@ -14,6 +15,7 @@ Classification createClassification(std::string_view name) {
   }
   throw InputError("unknown classification '" + std::string(name) + "' (known: " + known + ")");
 }
+//! [classification-factory]
 
 template <class S>
 std::vector<CellClass> classifyCells(const Classification& classification,

@@ -7,6 +7,7 @@
 
 namespace ndc {
 
+//! [connection-factory]
 Connection createConnection(std::string_view name) {
   if (name == "paper") return PaperConnection{};
   if (name == "naive") return NaiveConnection{};
@@ -14,5 +15,6 @@ Connection createConnection(std::string_view name) {
   throw InputError("unknown connection '" + std::string(name) +
                    "' (expected paper, naive or crossing)");
 }
+//! [connection-factory]
 
 }  // namespace ndc

@@ -56,6 +56,7 @@ class FaceSolver {
  private:
   void recurse(const std::vector<Bernstein<S>>& patches, const std::vector<bool>& closedUpper,
                int depth, std::vector<std::vector<S>>& roots) {
+    //! [crossing-face]
     // Exclusion: a coefficient hull of one sign on the face means no root.
     for (const auto& p : patches) {
       if (p.excludesZero()) return;
@@ -89,6 +90,7 @@ class FaceSolver {
     closedLower[axis] = false;
     recurse(lower, closedLower, depth + 1, roots);
     recurse(upper, closedUpper, depth + 1, roots);
+    //! [crossing-face]
   }
 
   /// m = 1 (hypersurfaces, k = n - 1): the face is a grid edge, and the parity of its roots is

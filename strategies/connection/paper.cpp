@@ -35,6 +35,7 @@ class PaperBuilder {
   }
 
   ConnectionOutput<S> run() {
+    //! [paper-alg1]
     // Sec. 4.1: the vertices are the projected points of the normal cells only.
     for (std::size_t c = 0; c < cells_.size(); ++c) {
       if (!normal(c)) continue;
@@ -66,6 +67,7 @@ class PaperBuilder {
       for (std::int32_t d : dangling)
         if (open(vertexOf_[d])) bridge(d, n_);
     compact();
+    //! [paper-alg1]
     return std::move(out_);
   }
 
@@ -203,6 +205,7 @@ class PaperBuilder {
   /// polyline (k = 1) or fan (k = 2) through the cluster's dangling points and the centroid.
   void bridge(std::int32_t d, int deeper = 0) {
     const int id = clusters_++;
+    //! [paper-cluster]
     // Alg. 1: N <- face-adjacent normal and abnormal cubes at d, then recursively through
     // abnormal cubes, up to n - 1 layers. Failed cells are traversed like abnormal ones but
     // have no point.
@@ -231,6 +234,7 @@ class PaperBuilder {
     // Alg. 1: delete the cluster's normal cubes from D.
     for (const auto& [u, depth] : queue)
       if (normal(u)) consumed_[u] = 1;
+    //! [paper-cluster]
     if (points.size() < 2) return;  // nothing to bridge: a lone end stays open
 
     // Alg. 1: the centroid of N (of its abnormal points; of all its points if none).

@@ -211,6 +211,7 @@ ProjectedPoint<S> NewtonProjection<S>::project(std::span<S> x) const {
     }
     if (it == maxIterations_) return result;
 
+    //! [newton-step]
     // Minimum-norm step s = J^+ F(x) from a rank-revealing decomposition of J.
     for (int i = 0; i < m; ++i) {
       rhs(i) = f[i];
@@ -226,6 +227,7 @@ ProjectedPoint<S> NewtonProjection<S>::project(std::span<S> x) const {
       stepNorm = std::max<S>(stepNorm, abs(step(j)));
     }
     result.iterations = it + 1;
+    //! [newton-step]
 
     // Divergence: the iterate ran away from where it started.
     const S size = normInf<S>(x);
@@ -261,6 +263,7 @@ Projections<S> projectCells(const Projection<S>& projection, const SolutionCells
   out.converged.resize(count);
   out.iterations.resize(count);
   const std::size_t every = std::max<std::size_t>(1, count / 100);
+  //! [project-cells]
   // One dispatch for the whole stage, not one per cell.
   std::visit(
       [&](const auto& strategy) {
@@ -278,6 +281,7 @@ Projections<S> projectCells(const Projection<S>& projection, const SolutionCells
         }
       },
       projection);
+  //! [project-cells]
   if (progress) progress("projection", 1.0);
   return out;
 }

@@ -8,11 +8,13 @@
 
 namespace ndc {
 
+//! [subdivision-factory]
 Subdivision createSubdivision(std::string_view name) {
   if (name == kSubdivisionNames[0]) return UniformSubdivision{};
   if (name == kSubdivisionNames[1]) return BinarySubdivision{};
   throw InputError("unknown subdivision '" + std::string(name) + "' (expected uniform or binary)");
 }
+//! [subdivision-factory]
 
 namespace {
 
@@ -41,6 +43,7 @@ class Traversal {
   }
 
  private:
+  //! [zerosetsubdiv]
   // Bounds the box of depth d if the subdivision says so; false: the box is discarded.
   bool keep(const typename B::State& state, int d) {
     if (!subdivision_.boundsAfter(d, n_)) return true;
@@ -68,6 +71,7 @@ class Traversal {
     if (keep(upper, d + 1)) descend(upper, d + 1);
     index_[axis] /= 2;
   }
+  //! [zerosetsubdiv]
 
   // A box of depth d is finished (discarded or a solution cell): its share of the domain's
   // volume is done.
