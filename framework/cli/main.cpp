@@ -7,6 +7,8 @@
 #include <vector>
 
 #include "cli/commands.hpp"
+#include "cli/experiment.hpp"
+#include "cli/report.hpp"
 #include "cli/solve_options.hpp"
 #include "problem.hpp"
 
@@ -41,6 +43,15 @@ int run(int argc, char** argv) {
   CLI::App* bench = app.add_subcommand("bench", "Time each pipeline stage on problem files");
   ndc::cli::addBenchOptions(*bench, benchOptions);
 
+  ndc::cli::ExperimentCommandOptions experimentOptions;
+  CLI::App* experiment =
+      app.add_subcommand("experiment", "Run an experiment config: problems x settings x depths");
+  ndc::cli::addExperimentOptions(*experiment, experimentOptions);
+
+  ndc::cli::ReportOptions reportOptions;
+  CLI::App* report = app.add_subcommand("report", "Write the tables, figures and report.md");
+  ndc::cli::addReportOptions(*report, reportOptions);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -51,14 +62,21 @@ int run(int argc, char** argv) {
     if (app.get_subcommands().empty() && !extra.empty() && extra.front().starts_with("-"))
       message = "unknown option '" + extra.front() + "'";
     else if (app.get_subcommands().empty() && !extra.empty())
-      message = "unknown subcommand '" + extra.front() + "' (accepted: info, solve, bench)";
+      message = "unknown subcommand '" + extra.front() +
+                "' (accepted: info, solve, bench, experiment, report)";
     else if (app.get_subcommands().empty())
-      message = "a subcommand is required (accepted: info, solve, bench)";
+      message = "a subcommand is required (accepted: info, solve, bench, experiment, report)";
     std::cerr << "ndcontour: " << oneLine(message) << " (see ndcontour --help)\n";
     return kExitBadInput;
   }
 
   if (bench->parsed()) return ndc::cli::runBench(benchOptions);
+  if (report->parsed()) return ndc::cli::runReport(reportOptions);
+  if (experiment->parsed()) {
+    std::string commandLine = "ndcontour";
+    for (int i = 1; i < argc; ++i) commandLine += std::string(" ") + argv[i];
+    return ndc::cli::runExperimentCommand(experimentOptions, commandLine);
+  }
   if (info->parsed()) {
     ndc::cli::printInfo(ndc::loadProblem(infoPath), std::cout);
     return 0;
