@@ -804,7 +804,7 @@ Artefact tab1Degeneracy(const std::string& id, const CsvTable& t) {
     a.sentences.push_back(
         "Our problems are our own stand-ins for the paper's freeform surfaces "
         "and the paper gives no depth, so the cell counts differ: ours are " +
-        formatNumber(ratio, 2) + " times the paper's (geometric mean).");
+        formatFixed(ratio, 2) + " times the paper's (geometric mean).");
   double failedCells = 0;
   for (const Ours& o : ours) failedCells += o.failed;
   if (failedCells > 0)
@@ -926,7 +926,7 @@ Artefact figDegeneracyVsN(const std::string& id, const CsvTable& t) {
                     k + ").");
   }
   if (!plots.empty()) {
-    gp.command("set xrange [" + std::to_string(nMin - 0.5) + ":" + std::to_string(nMax + 0.5) +
+    gp.command("set xrange [" + formatFixed(nMin - 0.5, 1) + ":" + formatFixed(nMax + 0.5, 1) +
                "]");
     gp.command("plot " + join(plots, ", \\\n       "));
     a.gnuplot = gp.text();
@@ -1030,8 +1030,8 @@ Artefact tabAblation(const std::string& id, const CsvTable& t, const std::string
     }
     if (!common) continue;
     a.sentences.push_back("`" + variants[v] + "` visits " +
-                          formatNumber(geometricMeanRatio(cells), 2) + " times the cells of `" +
-                          base + "` and takes " + formatNumber(geometricMeanRatio(time), 2) +
+                          formatFixed(geometricMeanRatio(cells), 2) + " times the cells of `" +
+                          base + "` and takes " + formatFixed(geometricMeanRatio(time), 2) +
                           " times its total time (geometric means over " + std::to_string(common) +
                           " problem settings); it keeps the same number of solution cells in " +
                           std::to_string(sameSolution) + " of them.");
@@ -1487,8 +1487,8 @@ Artefact figApplication(const std::string& id, const CsvTable& t,
   gp.command("set xlabel \"x\"");
   gp.command("set ylabel \"y\"");
   gp.command("set zlabel \"z\"");
-  gp.command("set pm3d depthorder border lc rgb \"#404040\" lw 0.3");
-  gp.command("set style fill solid 0.85");
+  gp.command("set palette defined (0 \"#08519c\", 1 \"#6baed6\", 2 \"#c6dbef\")");
+  gp.command("unset colorbox");
   gp.command("unset key");
   for (std::size_t p = 0; p < picks.size(); ++p) {
     const std::size_t r = picks[p];
@@ -1503,8 +1503,11 @@ Artefact figApplication(const std::string& id, const CsvTable& t,
     const bool curve = t.cell(r, "k") == "1";
     gp.command("set title \"" + t.cell(r, "problem") + " (n = " + t.cell(r, "n") + ", depth " +
                t.cell(r, "depth") + ")\"");
+    // Small meshes show their triangles; large ones are shaded by z only.
+    gp.command(mesh.simplices.size() < 4000 ? "set pm3d depthorder border lc rgb \"#3a6ea5\" lw 0.3"
+                                            : "set pm3d depthorder noborder");
     gp.command(curve ? "splot $" + name + " with lines lw 2 lc rgb \"#08519c\""
-                     : "splot $" + name + " with polygons fc rgb \"#9ecae1\"");
+                     : "splot $" + name + " with polygons fc palette z");
     const bool surface = !curve;
     a.sentences.push_back(
         "`" + t.cell(r, "problem") + "` (n = " + t.cell(r, "n") + ", depth " + t.cell(r, "depth") +
@@ -1638,9 +1641,8 @@ std::string artefactMarkdown(const Artefact& a) {
 }
 
 std::string runsLine(const Artefact& a) {
-  std::string out =
-      std::to_string(a.runs) + " runs, " + std::to_string(a.failures.size()) + " failed.";
-  return out;
+  return std::to_string(a.runs) + (a.runs == 1 ? " run, " : " runs, ") +
+         std::to_string(a.failures.size()) + " failed.";
 }
 
 }  // namespace
@@ -1759,7 +1761,7 @@ ReportOutcome writeReport(const ReportSettings& settings, std::ostream& log) {
         text << in.rdbuf();
         revision = jsonString(text.str(), {"git_revision", "revision", "commit", "git"});
       }
-      body += "Files: " + join(files, ", ") +
+      body += "\nFiles: " + join(files, ", ") +
               (revision.empty() ? "" : "; code revision `" + revision + "`") + ".\n";
       section.body = std::move(body);
       section.status = !render_note.empty() && render ? "not rendered"
