@@ -1,39 +1,82 @@
 #!/usr/bin/env bash
-# The README's main command: installs what is missing, builds, and solves every example problem
-# in experiments/problems/ with the crossing connection, writing results/<problem>/ and a table
-# results/summary.md that sets each result beside the problem's [expect] ground truth.
-set -euo pipefail
+# The README's main command: installs what is missing, builds, runs every experiment config in
+# experiments/configs/ (quick versions by default, full ones with --full) and writes the tables,
+# figures and results/report.md with `ndcontour report`. Results go to results/<id>/ (one id
+# per artefact, the same as its config); a run that is already finished is not run again.
+#
+# Usage: scripts/run.sh [--full] [--jobs N] [ID ...]
+#   --full     the full grids (paper-scale depths and seeds) instead of the quick ones
+#   --jobs N   runs at once (default: the number of cores)
+#   ID ...     only these experiments (default: every experiments/configs/*.toml)
+# Exit status: 0 when every run succeeded and every artefact was made, 1 otherwise (the report
+# is written in every case), 2 for bad usage.
+set -uo pipefail
 cd "$(dirname "$0")/.."
-scripts/build.sh
+
+mode=quick
+jobs=$(nproc)
+ids=()
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --full) mode=full ;;
+    --quick) mode=quick ;;
+    --jobs)
+      [[ $# -ge 2 && "$2" =~ ^[1-9][0-9]*$ ]] || { echo "run.sh: --jobs needs a positive number" >&2; exit 2; }
+      jobs=$2
+      shift ;;
+    -h | --help) sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -*) echo "run.sh: unknown option '$1' (see scripts/run.sh --help)" >&2; exit 2 ;;
+    *) ids+=("$1") ;;
+  esac
+  shift
+done
+
+start=$SECONDS
+scripts/build.sh || { echo "run.sh: the build failed" >&2; exit 1; }
 bin=build/bin/ndcontour
-depth=${NDC_DEPTH:-6}
+echo "run.sh: built $bin in $((SECONDS - start)) s"
+
+configs=()
+if [[ ${#ids[@]} -eq 0 ]]; then
+  configs=(experiments/configs/*.toml)
+else
+  for id in "${ids[@]}"; do
+    [[ -f "experiments/configs/$id.toml" ]] || { echo "run.sh: no experiments/configs/$id.toml" >&2; exit 2; }
+    configs+=("experiments/configs/$id.toml")
+  done
+fi
+
+flags=()
+[[ $mode == quick ]] && flags+=(--quick)
 mkdir -p results
-table=results/summary.md
-{
-  echo "# ndcontour: example problems (crossing connection, depth $depth, jitter 1)"
-  echo
-  echo "| problem | n | k | components (expected) | euler (expected) | boundary edges | non-manifold edges | open ends | max residual | seconds |"
-  echo "|---|---|---|---|---|---|---|---|---|---|"
-} > "$table"
-json() { grep -o "\"$1\": [^,}]*" "$2" | head -1 | sed 's/.*: //'; }
-expect() { sed -n '/^\[expect\]/,$p' "$2" | grep -E "^$1 *=" | head -1 | sed 's/.*= *//'; }
 status=0
-for problem in experiments/problems/*.toml; do
-  name=$(basename "$problem" .toml)
-  out="results/$name"
-  mkdir -p "$out"
-  "$bin" info "$problem" > "$out/info.txt"
-  if "$bin" solve "$problem" --depth "$depth" --connection crossing --jitter 1 --out "$out" \
-      > "$out/solve.log" 2>&1; then
-    s="$out/summary.json"
-    row="| $name | $(json n "$s") | $(json k "$s") | $(json components "$s") ($(expect components "$problem")) | $(json euler_characteristic "$s") ($(expect euler_characteristic "$problem")) | $(json boundary_edges "$s") | $(json nonmanifold_edges "$s") | $(json open_ends "$s") | $(printf '%.1e' "$(json max_residual "$s")") | $(printf '%.3f' "$(json total "$s")") |"
-    echo "$row" >> "$table"
-    echo "solved $name"
-  else
-    echo "| $name | failed: see $out/solve.log |||||||||" >> "$table"
-    echo "FAILED $name (see $out/solve.log)"
+failed=()
+i=0
+for config in "${configs[@]}"; do
+  i=$((i + 1))
+  id=$(basename "$config" .toml)
+  t0=$SECONDS
+  echo "run.sh: [$i/${#configs[@]}] $id ($mode, $jobs jobs)"
+  "$bin" experiment "$config" --out results --jobs "$jobs" "${flags[@]}"
+  rc=$?
+  if [[ $rc -ne 0 ]]; then
     status=1
+    failed+=("$id (exit $rc)")
+    echo "run.sh: $id: exit status $rc after $((SECONDS - t0)) s (failures are listed in results/report.md)"
+    # Interrupted (Ctrl-C): stop here, but still write the report of what is there.
+    [[ $rc -eq 130 ]] && break
+  else
+    echo "run.sh: $id: done in $((SECONDS - t0)) s"
   fi
 done
-echo "wrote $table"
+
+echo "run.sh: writing the report"
+report_flags=(--results results --configs experiments/configs)
+[[ $mode == quick ]] && report_flags+=(--quick)
+"$bin" report "${report_flags[@]}" || status=1
+
+echo "run.sh: $mode run finished in $((SECONDS - start)) s; see results/report.md"
+if [[ ${#failed[@]} -gt 0 ]]; then
+  echo "run.sh: experiments with failed runs: ${failed[*]}" >&2
+fi
 exit $status
