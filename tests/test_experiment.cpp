@@ -1,0 +1,592 @@
+// The experiment runner (docs/experiments.md) as a process: config validation, the combined
+// CSV, resume, failure recording and provenance; the problem generators in-process.
+#include <catch2/catch.hpp>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "experiment.hpp"
+#include "generate.hpp"
+#include "io.hpp"
+#include "problem.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A scratch directory for this test process, removed at exit.
+const fs::path& scratch() {
+  struct Dir {
+    fs::path path =
+        fs::temp_directory_path() / ("ndc-test-experiment-" + std::to_string(::getpid()));
+    Dir() { fs::create_directories(path); }
+    ~Dir() {
+      std::error_code ec;
+      fs::remove_all(path, ec);
+    }
+  };
+  static const Dir dir;
+  return dir.path;
+}
+
+std::string quoted(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+std::string slurp(const fs::path& file) {
+  std::ifstream in(file);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+struct Run {
+  int status = -1;
+  std::string out, err;
+};
+
+/// Runs `ndcontour ARGS` (ARGS already shell-quoted) and captures status, stdout and stderr.
+Run ndcontour(const std::string& args) {
+  const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt";
+  const std::string command = quoted(ndc::test::binaryPath()) + " " + args + " >" +
+                              quoted(out.string()) + " 2>" + quoted(err.string()) + " </dev/null";
+  const int raw = std::system(command.c_str());
+  Run run;
+  run.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  run.out = slurp(out);
+  run.err = slurp(err);
+  return run;
+}
+
+/// Writes a config `<dir>/<id>.toml` and returns its path.
+fs::path writeConfig(const std::string& id, const std::string& text,
+                     const std::string& dir = "configs") {
+  fs::create_directories(scratch() / dir);
+  const fs::path file = scratch() / dir / (id + ".toml");
+  std::ofstream(file) << text;
+  return file;
+}
+
+std::string example(const std::string& name) {
+  return (fs::path(ndc::test::sourceDir()) / "experiments" / "problems" / (name + ".toml"))
+      .string();
+}
+
+/// `ndcontour experiment CONFIG --out OUT ARGS`.
+Run experiment(const fs::path& config, const fs::path& out, const std::string& args = "") {
+  return ndcontour("experiment " + quoted(config.string()) + " --out " + quoted(out.string()) +
+                   " " + args);
+}
+
+/// A CSV file as rows of fields (RFC 4180 quoting).
+std::vector<std::vector<std::string>> readCsv(const fs::path& file) {
+  const std::string text = slurp(file);
+  std::vector<std::vector<std::string>> rows;
+  std::vector<std::string> row;
+  std::string field;
+  bool inQuotes = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (inQuotes) {
+      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
+        field += '"';
+        ++i;
+      } else if (c == '"') {
+        inQuotes = false;
+      } else {
+        field += c;
+      }
+    } else if (c == '"') {
+      inQuotes = true;
+    } else if (c == ',') {
+      row.push_back(field);
+      field.clear();
+    } else if (c == '\n') {
+      row.push_back(field);
+      field.clear();
+      rows.push_back(row);
+      row.clear();
+    } else {
+      field += c;
+    }
+  }
+  return rows;
+}
+
+/// Rows of a CSV as maps from column name to value.
+std::vector<std::map<std::string, std::string>> csvRecords(const fs::path& file) {
+  const auto rows = readCsv(file);
+  std::vector<std::map<std::string, std::string>> records;
+  for (std::size_t r = 1; r < rows.size(); ++r) {
+    REQUIRE(rows[r].size() == rows[0].size());
+    std::map<std::string, std::string> record;
+    for (std::size_t c = 0; c < rows[0].size(); ++c) record[rows[0][c]] = rows[r][c];
+    records.push_back(record);
+  }
+  return records;
+}
+
+/// Status 2, nothing on stdout, exactly one line on stderr holding every part.
+void checkBadConfig(const Run& run, std::initializer_list<std::string> parts) {
+  INFO("stderr: " << run.err << "stdout: " << run.out);
+  CHECK(run.status == 2);
+  CHECK(run.out.empty());
+  CHECK(std::count(run.err.begin(), run.err.end(), '\n') == 1);
+  for (const auto& part : parts) CHECK(contains(run.err, part));
+}
+
+/// The exact header of the combined CSV: other tools read it by these names.
+const std::string kHeader =
+    "experiment,run,problem,problem_file,n,k,depth,seed,scalar,precision_bits,bounding,"
+    "subdivision,projection,classification,connection,status,exit_code,error,expect_components,"
+    "expect_euler_characteristic,cells.visited,cells.solution,cells.normal,cells.abnormal,"
+    "cells.failed,mesh.vertices,mesh.edges,mesh.triangles,mesh.components,mesh.boundary_edges,"
+    "mesh.nonmanifold_edges,mesh.euler_characteristic,mesh.open_ends,mesh.branch_vertices,"
+    "accuracy.max_residual,accuracy.max_chord_error,diagnostics.ambiguous_cells,"
+    "diagnostics.singular_cells,diagnostics.chord_failures,timing_s.subdivision,"
+    "timing_s.projection,timing_s.connection,timing_s.analysis,timing_s.total";
+
+const std::string kTiny =
+    "id = \"tiny\"\nartefact = \"table\"\ndescription = \"a tiny grid\"\n"
+    "problems = [\"" +
+    example("circle") +
+    "\"]\n"
+    "connection = [\"paper\", \"crossing\"]\ndepths = [3, 4]\n"
+    "timeout_s = 60\n[quick]\ndepths = [2]\n";
+
+}  // namespace
+
+TEST_CASE("experiment: bad configs exit 2 with one line naming file, line and column",
+          "[experiment]") {
+  struct Case {
+    std::string id;
+    std::string text;
+    std::string position;  // right after "FILE:" (line and column where the text fixes them)
+    std::string message;
+  };
+  const std::string head = "artefact = \"table\"\ndescription = \"d\"\n";
+  const std::string circle = "problems = [\"" + example("circle") + "\"]\n";
+  const std::vector<Case> cases = {
+      {"syntax", "id = \"syntax\"\nartefact = \"table\n", "2:", "TOML syntax error"},
+      {"stem", "id = \"other\"\n" + head + circle + "depths = [3]\n",
+       "1:6:", "id 'other' must equal the file name"},
+      {"unknown-key", "id = \"unknown-key\"\n" + head + circle + "depths = [3]\ncolour = 1\n",
+       "6:1:", "unknown key 'colour'"},
+      {"missing-depths", "id = \"missing-depths\"\n" + head + circle, " missing",
+       "required key 'depths'"},
+      {"wrong-type", "id = \"wrong-type\"\n" + head + circle + "depths = \"3\"\n",
+       "5:10:", "depths must be an integer, not a string"},
+      {"depth-range", "id = \"depth-range\"\n" + head + circle + "depths = [3, 31]\n",
+       "5:14:", "depths = 31 is out of range"},
+      {"strategy",
+       "id = \"strategy\"\n" + head + circle + "depths = [3]\nbounding = [\"taylor\"]\n", "6:13:",
+       "bounding: unknown bounding strategy 'taylor' (accepted: bernstein, interval, "
+       "linearized)"},
+      {"connection",
+       "id = \"connection\"\n" + head + circle + "depths = [3]\nconnection = \"mc\"\n",
+       "6:14:", "unknown connection strategy 'mc'"},
+      {"artefact",
+       "id = \"artefact\"\nartefact = \"movie\"\ndescription = \"d\"\n" + circle + "depths = [3]\n",
+       "2:12:", "unknown artefact 'movie'"},
+      {"missing-file",
+       "id = \"missing-file\"\n" + head + "problems = [\"no/such/problem.toml\"]\ndepths = [3]\n",
+       "4:13:", "no such problem file 'no/such/problem.toml'"},
+      {"glob",
+       "id = \"glob\"\n" + head + "problems = [\"/nonexistent-dir/*.toml\"]\ndepths = [3]\n",
+       "4:13:", "'/nonexistent-dir/*.toml': no such directory"},
+      {"generator",
+       "id = \"generator\"\n" + head +
+           "problems = [{ generator = \"rotated-cube\", n = [3] }]\ndepths = [3]\n",
+       "4:27:", "unknown generator 'rotated-cube'"},
+      {"generator-n",
+       "id = \"generator-n\"\n" + head +
+           "problems = [{ generator = \"rotated-sphere\", n = [2] }]\ndepths = [3]\n",
+       "4:50:", "n = 2 is out of range (accepted: 3..12)"},
+      {"quick-key", "id = \"quick-key\"\n" + head + circle + "depths = [3]\n[quick]\nid = \"x\"\n",
+       "7:1:", "unknown key 'quick.id'"},
+      {"quick-value",
+       "id = \"quick-value\"\n" + head + circle + "depths = [3]\n[quick]\ndepths = [0]\n",
+       "7:11:", "quick.depths = 0 is out of range"},
+      {"precision", "id = \"precision\"\n" + head + circle + "depths = [3]\nprecision = [64]\n",
+       "6:13:", "precision applies to scalar \"mpfr\" only"},
+      {"duplicate",
+       "id = \"duplicate\"\n" + head + "problems = [\"" + example("circle") + "\", \"" +
+           example("circle") + "\"]\ndepths = [3]\n",
+       "4:", "problem name 'circle' appears twice"},
+      {"repeat", "id = \"repeat\"\n" + head + circle + "depths = [3, 3]\n",
+       "5:14:", "depths lists a value twice"},
+      {"timeout", "id = \"timeout\"\n" + head + circle + "depths = [3]\ntimeout_s = 0\n",
+       "6:13:", "timeout_s must be positive"},
+      {"entry-key",
+       "id = \"entry-key\"\n" + head + "problems = [{ file = \"" + example("circle") +
+           "\", seed = 1 }]\ndepths = [3]\n",
+       "4:", "unknown key 'seed' in a problem file entry"},
+  };
+  for (const Case& c : cases) {
+    INFO(c.id);
+    const fs::path config = writeConfig(c.id, c.text);
+    checkBadConfig(experiment(config, scratch() / "bad-out"),
+                   {config.string() + ":" + c.position, c.message});
+  }
+  // No run was started and nothing was written for a bad config.
+  CHECK(!fs::exists(scratch() / "bad-out"));
+
+  // A problem file that does not load is reported at its own position.
+  const fs::path broken = scratch() / "broken.toml";
+  std::ofstream(broken) << "name = \"broken\"\nvariables = [\"x\", \"y\"]\n";
+  checkBadConfig(experiment(writeConfig("broken-problem", "id = \"broken-problem\"\n" + head +
+                                                              "problems = [\"" + broken.string() +
+                                                              "\"]\ndepths = [3]\n"),
+                            scratch() / "bad-out"),
+                 {broken.string(), "missing required key 'domain'"});
+  // Unreadable config and bad options.
+  checkBadConfig(experiment(scratch() / "configs" / "absent.toml", scratch() / "bad-out"),
+                 {"absent.toml", "No such file or directory"});
+  const fs::path tiny = writeConfig("tiny", kTiny);
+  checkBadConfig(experiment(tiny, scratch() / "bad-out", "--jobs 0"), {"--jobs"});
+  checkBadConfig(ndcontour("experiment"), {"config"});
+}
+
+TEST_CASE("experiment: a tiny grid writes the combined CSV, one row per run in grid order",
+          "[experiment]") {
+  const fs::path config = writeConfig("tiny", kTiny);
+  const fs::path out = scratch() / "tiny-out";
+  fs::remove_all(out);
+  const Run run = experiment(config, out, "--jobs 2");
+  INFO("stdout: " << run.out << "stderr: " << run.err);
+  REQUIRE(run.status == 0);
+  CHECK(contains(run.out, "experiment tiny: 4 runs: 4 ran, 0 skipped"));
+  const fs::path csv = out / "tiny" / "tiny.csv";
+  REQUIRE(fs::exists(csv));
+  CHECK(readCsv(csv).front().size() ==
+        ndc::kExperimentRunColumns.size() + ndc::kExperimentSummaryColumns.size());
+  CHECK(slurp(csv).substr(0, slurp(csv).find('\n')) == kHeader);
+
+  // Grid order: settings (connection) outside, depth inside.
+  const auto records = csvRecords(csv);
+  REQUIRE(records.size() == 4);
+  const std::vector<std::pair<std::string, std::string>> order = {
+      {"paper", "3"}, {"paper", "4"}, {"crossing", "3"}, {"crossing", "4"}};
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const auto& r = records[i];
+    INFO(r.at("run"));
+    CHECK(r.at("experiment") == "tiny");
+    CHECK(r.at("problem") == "circle");
+    CHECK(r.at("problem_file") == example("circle"));
+    CHECK(r.at("n") == "2");
+    CHECK(r.at("k") == "1");
+    CHECK(r.at("connection") == order[i].first);
+    CHECK(r.at("depth") == order[i].second);
+    CHECK(r.at("seed").empty());
+    CHECK(r.at("scalar") == "double");
+    CHECK(r.at("precision_bits") == "53");
+    CHECK(r.at("bounding") == "linearized");
+    CHECK(r.at("status") == "ok");
+    CHECK(r.at("exit_code") == "0");
+    CHECK(r.at("error").empty());
+    CHECK(r.at("expect_components") == "1");
+    CHECK(r.at("mesh.components") == "1");
+    CHECK(r.at("mesh.euler_characteristic") == "0");
+    CHECK(std::stoi(r.at("cells.solution")) > 0);
+    CHECK(std::stod(r.at("timing_s.total")) >= 0);
+    // Each run directory holds the solve outputs, its stderr and its command.
+    const fs::path runDir = out / "tiny" / "runs" / r.at("run");
+    for (const char* file : {"summary.json", "mesh.ply", "cells.csv", "stderr.txt", "command.txt"})
+      CHECK(fs::exists(runDir / file));
+    CHECK(contains(slurp(runDir / "command.txt"), "ndcontour solve "));
+  }
+
+  // The rows do not depend on --jobs.
+  const fs::path serial = scratch() / "tiny-serial";
+  fs::remove_all(serial);
+  REQUIRE(experiment(config, serial, "--jobs 1").status == 0);
+  const auto again = csvRecords(serial / "tiny" / "tiny.csv");
+  REQUIRE(again.size() == records.size());
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    CHECK(again[i].at("run") == records[i].at("run"));
+    CHECK(again[i].at("cells.solution") == records[i].at("cells.solution"));
+  }
+
+  // --quick applies the [quick] table.
+  const Run quick = experiment(config, out, "--quick");
+  CHECK(quick.status == 0);
+  const auto quickRecords = csvRecords(csv);
+  REQUIRE(quickRecords.size() == 2);
+  for (const auto& r : quickRecords) CHECK(r.at("depth") == "2");
+  CHECK(contains(slurp(out / "tiny" / "provenance.json"), "\"quick\": true"));
+}
+
+TEST_CASE("experiment: re-running skips finished runs and repeats unfinished ones",
+          "[experiment]") {
+  const fs::path config = writeConfig("tiny", kTiny);
+  const fs::path out = scratch() / "resume-out";
+  fs::remove_all(out);
+  REQUIRE(experiment(config, out).status == 0);
+  const fs::path runs = out / "tiny" / "runs";
+  std::map<std::string, fs::file_time_type> mtimes;
+  for (const auto& entry : fs::directory_iterator(runs))
+    mtimes[entry.path().filename().string()] = fs::last_write_time(entry.path() / "summary.json");
+  REQUIRE(mtimes.size() == 4);
+  const std::string csv = slurp(out / "tiny" / "tiny.csv");
+
+  const Run again = experiment(config, out);
+  INFO(again.out << again.err);
+  CHECK(again.status == 0);
+  CHECK(contains(again.out, "4 runs: 0 ran, 4 skipped"));
+  for (const auto& [run, mtime] : mtimes)
+    CHECK(fs::last_write_time(runs / run / "summary.json") == mtime);
+  CHECK(slurp(out / "tiny" / "tiny.csv") == csv);
+
+  // A run without summary.json is unfinished: it runs again, the others stay.
+  const std::string first = mtimes.begin()->first;
+  fs::remove(runs / first / "summary.json");
+  const Run partial = experiment(config, out);
+  CHECK(partial.status == 0);
+  CHECK(contains(partial.out, "4 runs: 1 ran, 3 skipped"));
+  CHECK(fs::exists(runs / first / "summary.json"));
+  CHECK(csvRecords(out / "tiny" / "tiny.csv").size() == 4);
+}
+
+TEST_CASE("experiment: failed and timed-out runs are recorded and reported, never dropped",
+          "[experiment]") {
+  // torus at depth 14: k * depth = 28 > 26, which solve rejects (exit 2); depth 3 succeeds.
+  const fs::path failing = writeConfig(
+      "failing", "id = \"failing\"\nartefact = \"table\"\ndescription = \"d\"\nproblems = [\"" +
+                     example("torus") + "\"]\ndepths = [14, 3]\n");
+  const fs::path out = scratch() / "failing-out";
+  fs::remove_all(out);
+  const Run run = experiment(failing, out);
+  INFO("stdout: " << run.out << "stderr: " << run.err);
+  CHECK(run.status == 1);
+  CHECK(contains(run.out, "2 runs: 2 ran, 0 skipped (finished before), 1 failed"));
+  CHECK(contains(run.out, "failed: torus.L14."));
+  auto records = csvRecords(out / "failing" / "failing.csv");
+  REQUIRE(records.size() == 2);
+  CHECK(records[0].at("depth") == "14");
+  CHECK(records[0].at("status") == "failed");
+  CHECK(records[0].at("exit_code") == "2");
+  CHECK(contains(records[0].at("error"), "k * depth <= 26"));
+  CHECK(records[0].at("cells.visited").empty());
+  CHECK(records[0].at("timing_s.total").empty());
+  CHECK(records[1].at("status") == "ok");
+  CHECK(!records[1].at("cells.visited").empty());
+  // The failure is kept in the run directory and in the provenance.
+  CHECK(
+      contains(slurp(out / "failing" / "runs" / records[0].at("run") / "stderr.txt"), "k * depth"));
+  CHECK(contains(slurp(out / "failing" / "provenance.json"), "\"failed\": 1"));
+  // A failed run is not finished: the next invocation tries it again.
+  const Run again = experiment(failing, out);
+  CHECK(again.status == 1);
+  CHECK(contains(again.out, "2 runs: 1 ran, 1 skipped (finished before), 1 failed"));
+
+  // A run past its timeout is killed and recorded as such.
+  const fs::path slow = writeConfig(
+      "slow", "id = \"slow\"\nartefact = \"figure\"\ndescription = \"d\"\nproblems = [\"" +
+                  example("sphere-r4") + "\"]\ndepths = [7]\ntimeout_s = 0.001\n");
+  const Run timeout = experiment(slow, out);
+  CHECK(timeout.status == 1);
+  CHECK(contains(timeout.out, "timeout"));
+  records = csvRecords(out / "slow" / "slow.csv");
+  REQUIRE(records.size() == 1);
+  CHECK(records[0].at("status") == "timeout");
+  CHECK(records[0].at("exit_code").empty());
+  CHECK(contains(records[0].at("error"), "timed out after 0.001 s"));
+  CHECK(!fs::exists(out / "slow" / "runs" / records[0].at("run") / "summary.json"));
+}
+
+TEST_CASE("experiment: provenance records code, build, config, grid, date and machine",
+          "[experiment]") {
+  const fs::path config = writeConfig(
+      "prov", "id = \"prov\"\nartefact = \"table\"\ndescription = \"d\"\nproblems = [\"" +
+                  example("circle") +
+                  "\"]\nscalar = [\"double\", \"mpfr\"]\nprecision = [64]\ndepths = [3]\n"
+                  "seeds = [1, 2]\n");
+  const fs::path out = scratch() / "prov-out";
+  fs::remove_all(out);
+  const Run run = experiment(config, out, "--jobs 2");
+  INFO(run.out << run.err);
+  REQUIRE(run.status == 0);
+  CHECK(csvRecords(out / "prov" / "prov.csv").size() == 4);
+  const std::string p = slurp(out / "prov" / "provenance.json");
+  INFO(p);
+  for (const char* field : {"\"schema\": \"ndcontour.provenance/1\"",
+                            "\"experiment\": \"prov\"",
+                            "\"git\": {",
+                            "\"revision\": \"",
+                            "\"dirty\": ",
+                            "\"compiler\": \"",
+                            "\"flags\": \"",
+                            "\"build_type\": \"",
+                            "\"scalar\": [\"double\", \"mpfr\"]",
+                            "\"precision_bits\": [64]",
+                            "\"depths\": [3]",
+                            "\"seeds\": [1, 2]",
+                            "\"bounding\": [\"linearized\"]",
+                            "\"connection\": [\"crossing\"]",
+                            "\"date\": \"20",
+                            "\"hostname\": \"",
+                            "\"nproc\": ",
+                            "\"cpu_model\": \"",
+                            "\"memory_bytes\": ",
+                            "\"jobs\": 2",
+                            "\"total\": 4"})
+    CHECK(contains(p, field));
+  CHECK(contains(p, "\"sha256\": \"" + ndc::sha256Hex(slurp(config)) + "\""));
+  // The date is UTC ISO 8601.
+  const auto date = p.find("\"date\": \"");
+  REQUIRE(date != std::string::npos);
+  const std::string stamp = p.substr(date + 9, 20);
+  CHECK(stamp.size() == 20);
+  CHECK(stamp[4] == '-');
+  CHECK(stamp[10] == 'T');
+  CHECK(stamp[19] == 'Z');
+  // The summary numbers parse as JSON numbers with the names of the CSV.
+  const auto numbers = ndc::flattenJsonNumbers(p);
+  CHECK(std::find_if(numbers.begin(), numbers.end(), [](const auto& n) {
+          return n.first == "runs.total" && n.second == "4";
+        }) != numbers.end());
+}
+
+TEST_CASE("experiment: problem globs and generated problems", "[experiment]") {
+  // A glob expands to the sorted matching files; paths are relative to the config's directory
+  // outside a repository layout.
+  const fs::path dir = scratch() / "globbed";
+  fs::create_directories(dir / "problems");
+  fs::copy_file(example("circle"), dir / "problems" / "b.toml",
+                fs::copy_options::overwrite_existing);
+  fs::copy_file(example("two-circles"), dir / "problems" / "a.toml",
+                fs::copy_options::overwrite_existing);
+  const fs::path config =
+      writeConfig("globbed",
+                  "id = \"globbed\"\nartefact = \"figure\"\ndescription = \"d\"\n"
+                  "problems = [\"problems/*.toml\", { generator = \"rotated-sphere\", "
+                  "n = [4], seeds = [7] }]\ndepths = [3]\n",
+                  "globbed");
+  const fs::path out = scratch() / "globbed-out";
+  fs::remove_all(out);
+  const Run run = experiment(config, out);
+  INFO(run.out << run.err);
+  REQUIRE(run.status == 0);
+  const auto records = csvRecords(out / "globbed" / "globbed.csv");
+  REQUIRE(records.size() == 3);
+  CHECK(records[0].at("problem_file") == "problems/a.toml");
+  CHECK(records[0].at("problem") == "two-circles");
+  CHECK(records[1].at("problem_file") == "problems/b.toml");
+  CHECK(records[2].at("problem") == "rotated-sphere-n4-s7");
+  CHECK(records[2].at("k") == "2");
+  CHECK(records[2].at("expect_euler_characteristic") == "2");
+
+  // The generated problem is a file beside the results; solving it repeats the run.
+  const fs::path generated = out / "globbed" / "problems" / "rotated-sphere-n4-s7.toml";
+  CHECK(records[2].at("problem_file") == generated.generic_string());
+  REQUIRE(fs::exists(generated));
+  const ndc::Problem problem = ndc::loadProblem(generated);
+  CHECK(problem.n() == 4);
+  CHECK(problem.k() == 2);
+  const Run solve = ndcontour("solve " + quoted(generated.string()) + " --depth 3 --json");
+  CHECK(solve.status == 0);
+  CHECK(contains(solve.out, "\"solution\": " + records[2].at("cells.solution") + ","));
+}
+
+TEST_CASE("experiment: generated problems parse and their sampled points satisfy the equations",
+          "[experiment]") {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> normal;
+  for (const std::string generator : {"rotated-circle", "rotated-sphere"}) {
+    const int k = generator == "rotated-circle" ? 1 : 2;
+    for (int n = k + 1; n <= ndc::kMaxGeneratedDimension; ++n) {
+      for (std::uint64_t seed : {0, 1, 17}) {
+        INFO(generator << " n = " << n << " seed " << seed);
+        const ndc::GeneratedProblem g = ndc::generateProblem(generator, n, seed);
+        CHECK(g.name == generator + "-n" + std::to_string(n) + "-s" + std::to_string(seed));
+        const ndc::Problem p = ndc::parseProblem(g.text, g.name);
+        CHECK(p.name == g.name);
+        CHECK(p.n() == n);
+        CHECK(p.k() == k);
+        CHECK(p.expect.components == 1);
+        CHECK(p.expect.eulerCharacteristic == (k == 1 ? 0 : 2));
+        // Q is orthogonal.
+        for (int i = 0; i < n; ++i)
+          for (int j = 0; j < n; ++j) {
+            double dot = 0;
+            for (int l = 0; l < n; ++l) dot += g.rotation[i * n + l] * g.rotation[j * n + l];
+            CHECK(std::abs(dot - (i == j ? 1.0 : 0.0)) < 1e-12);
+          }
+        // Points of M are zeros of every equation and lie inside the domain with margin.
+        for (int s = 0; s < 20; ++s) {
+          std::vector<double> u(k + 1);
+          double norm = 0;
+          for (double& v : u) {
+            v = normal(rng);
+            norm += v * v;
+          }
+          for (double& v : u) v /= std::sqrt(norm);
+          const std::vector<double> x = ndc::generatedPoint(g, u);
+          for (int j = 0; j < n; ++j) {
+            CHECK(x[j] > p.domain.lo[j] + 0.1);
+            CHECK(x[j] < p.domain.hi[j] - 0.1);
+          }
+          for (const ndc::Expression& e : p.equations)
+            CHECK(std::abs(e.evaluate<double>(std::span<const double>(x))) < 1e-12);
+          // A point off M (scaled radius) is not a zero of the quadric.
+          std::vector<double> off = x;
+          for (int j = 0; j < n; ++j) off[j] = g.offset[j] + 1.1 * (x[j] - g.offset[j]);
+          CHECK(std::abs(p.equations[0].evaluate<double>(std::span<const double>(off))) > 0.1);
+        }
+        // Deterministic, and different seeds give different embeddings.
+        CHECK(ndc::generateProblem(generator, n, seed).text == g.text);
+        CHECK(ndc::generateProblem(generator, n, seed + 1).text != g.text);
+      }
+    }
+    CHECK_THROWS_AS(ndc::generateProblem(generator, k, 0), std::invalid_argument);
+    CHECK_THROWS_AS(ndc::generateProblem(generator, ndc::kMaxGeneratedDimension + 1, 0),
+                    std::invalid_argument);
+  }
+  CHECK_THROWS_AS(ndc::generateProblem("rotated-torus", 4, 0), std::invalid_argument);
+}
+
+TEST_CASE("experiment: summary columns, JSON numbers and SHA-256", "[experiment]") {
+  // Every summary column of the CSV is a numeric field of summary.json (design.md 4.3).
+  ndc::Summary summary;
+  const auto numbers = ndc::flattenJsonNumbers(ndc::toJson(summary));
+  for (const std::string_view column : ndc::kExperimentSummaryColumns) {
+    INFO(column);
+    CHECK(std::find_if(numbers.begin(), numbers.end(),
+                       [&](const auto& n) { return n.first == column; }) != numbers.end());
+  }
+  const auto parsed =
+      ndc::flattenJsonNumbers(R"({"a": {"b": 1.5e-3, "c": null, "d": "x,y"}, "e": [1, -2]})");
+  REQUIRE(parsed.size() == 4);
+  CHECK(parsed[0] == std::make_pair(std::string("a.b"), std::string("1.5e-3")));
+  CHECK(parsed[1] == std::make_pair(std::string("a.c"), std::string("")));
+  CHECK(parsed[2] == std::make_pair(std::string("e.0"), std::string("1")));
+  CHECK_THROWS(ndc::flattenJsonNumbers("{\"a\": }"));
+  CHECK_THROWS(ndc::flattenJsonNumbers("{\"a\": 1"));
+  // FIPS 180-2 examples.
+  CHECK(ndc::sha256Hex("") == "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  CHECK(ndc::sha256Hex("abc") ==
+        "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  CHECK(ndc::sha256Hex("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq") ==
+        "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+  // Two blocks of padding and a message longer than one block.
+  CHECK(ndc::sha256Hex(std::string(1000, 'a')) ==
+        "41edece42d63e8d9bf515a9ba6932e1c20cbc9f5a5d134645adb5db1b9737ea3");
+}
