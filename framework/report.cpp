@@ -1398,7 +1398,17 @@ Artefact figCells(const std::string& id, const CsvTable& t, const std::filesyste
         {cells.number(x, "c0"), cells.number(x, "c1"), half[0], half[1]});
     points.push_back({cells.number(x, "p0"), cells.number(x, "p1")});
   }
-  GnuplotScript gp(id, 900, 900);
+  // A canvas of the cells' aspect ratio (the plot keeps x and y to scale).
+  double lo[2] = {HUGE_VAL, HUGE_VAL}, hi[2] = {-HUGE_VAL, -HUGE_VAL};
+  for (std::size_t x = 0; x < cells.size(); ++x)
+    for (int j = 0; j < 2; ++j) {
+      const double c = cells.number(x, j ? "c1" : "c0");
+      lo[j] = std::min(lo[j], c - half[j]);
+      hi[j] = std::max(hi[j], c + half[j]);
+    }
+  const double aspect =
+      cells.size() ? std::clamp((hi[1] - lo[1]) / (hi[0] - lo[0]), 0.3, 1.5) : 1.0;
+  GnuplotScript gp(id, 1000, static_cast<int>(150 + 850 * aspect));
   gp.command("set size ratio -1");
   gp.command("set title \"" + t.cell(r, "problem") + ", depth " + t.cell(r, "depth") +
              ": solution cells and the polyline\"");
@@ -1785,7 +1795,7 @@ ReportOutcome writeReport(const ReportSettings& settings, std::ostream& log) {
         revision = jsonString(text.str(), {"git_revision", "revision", "commit", "git"});
       }
       body += "\nFiles: " + join(files, ", ") +
-              (revision.empty() ? "" : "; code revision `" + revision + "`") + ".\n";
+              (revision.empty() ? "" : "; code revision `" + revision.substr(0, 12) + "`") + ".\n";
       section.body = std::move(body);
       section.status = !render_note.empty() && render ? "not rendered"
                        : a.failures.empty()           ? "ok"
