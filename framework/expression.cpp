@@ -13,6 +13,7 @@
 #include <charconv>
 #include <climits>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
@@ -60,6 +61,8 @@ std::unique_ptr<ExprNode> clone(const ExprNode& n) {
   node->exponent = n.exponent;
   if (n.left) node->left = clone(*n.left);
   if (n.right) node->right = clone(*n.right);
+  node->polynomial = n.polynomial;
+  node->partials = n.partials;
   return node;
 }
 
@@ -100,6 +103,7 @@ struct Arith<double> {
 template <>
 struct Arith<Mpfr> {
   static Mpfr number(const ExprNode& n) {
+    if (n.literal.empty()) return Mpfr(n.value);  // an exact double
     Mpfr v;
     mpfr_set_str(v.backend().data(), n.literal.c_str(), 10, MPFR_RNDN);
     return v;
@@ -124,6 +128,7 @@ struct Arith<Interval<S>> {
     if constexpr (std::is_same_v<S, double>) {
       return T(n.enclosureLo, n.enclosureHi);
     } else {
+      if (n.literal.empty()) return T(S(n.value));  // an exact double
       return T::fromString(n.literal);
     }
   }
@@ -138,6 +143,31 @@ struct Arith<Interval<S>> {
     return a * reciprocal;
   }
 };
+
+// ---- Piecewise Bernstein leaves -----------------------------------------------------------------
+
+template <class T>
+struct IntervalScalar {
+  using type = void;
+};
+template <class S>
+struct IntervalScalar<Interval<S>> {
+  using type = S;
+};
+
+/// Value (or enclosure, for intervals) of a leaf at the problem point x.
+template <class T>
+T leafValue(const PiecewiseBernstein& leaf, std::span<const T> x) {
+  constexpr int kMax = 8;  // PiecewiseBernstein::validate allows at most 8 axes
+  T local[kMax];
+  for (int a = 0; a < leaf.dim(); ++a) local[a] = x[leaf.axes[a]];
+  const std::span<const T> span(local, static_cast<std::size_t>(leaf.dim()));
+  using S = typename IntervalScalar<T>::type;
+  if constexpr (std::is_void_v<S>)
+    return leaf.evaluate<T>(span);
+  else
+    return leaf.enclose<S>(span);
+}
 
 // ---- Evaluation of the value only ---------------------------------------------------------------
 
@@ -162,6 +192,8 @@ T evalValue(const ExprNode& n, std::span<const T> x) {
       return Arith<T>::power(evalValue(*n.left, x), n.exponent);
     case K::kNeg:
       return -evalValue(*n.left, x);
+    case K::kPolynomial:
+      return leafValue<T>(*n.polynomial, x);
   }
   throw std::logic_error("Expression: bad node kind");
 }
@@ -248,6 +280,15 @@ class GradientEvaluator {
         eval(*n.left, slot);
         for (std::size_t k = 0; k < stride_; ++k) out[k] = -out[k];
         return;
+      case K::kPolynomial: {
+        // The leaf's value, and its partials along its own axes (zero along the others).
+        out[0] = leafValue<T>(*n.polynomial, x_);
+        setZeroGradient(out);
+        const auto& axes = n.polynomial->axes;
+        for (std::size_t a = 0; a < axes.size(); ++a)
+          out[axes[a] + 1] = leafValue<T>(*n.partials[a], x_);
+        return;
+      }
     }
     throw std::logic_error("Expression: bad node kind");
   }
@@ -268,7 +309,8 @@ Bernstein<S> evalBernstein(const ExprNode& n, const Box<S>& domain) {
   using K = ExprNode::Kind;
   switch (n.kind) {
     case K::kNumber:
-      return Bernstein<S>::constant(domain, ScalarTraits<S>::fromString(n.literal));
+      return Bernstein<S>::constant(
+          domain, n.literal.empty() ? S(n.value) : ScalarTraits<S>::fromString(n.literal));
     case K::kVariable:
       return Bernstein<S>::variable(domain, n.variable);
     case K::kAdd:
@@ -286,6 +328,16 @@ Bernstein<S> evalBernstein(const ExprNode& n, const Box<S>& domain) {
       return pow(evalBernstein(*n.left, domain), n.exponent);
     case K::kNeg:
       return -evalBernstein(*n.left, domain);
+    case K::kPolynomial: {
+      // The piece holding the domain's projection, restricted to it, embedded in n variables.
+      const PiecewiseBernstein& leaf = *n.polynomial;
+      Box<S> local;
+      for (int axis : leaf.axes) {
+        local.lo.push_back(domain.lo[axis]);
+        local.hi.push_back(domain.hi[axis]);
+      }
+      return leaf.onBox<S>(local).embed(domain, leaf.axes);
+    }
   }
   throw std::logic_error("Expression: bad node kind");
 }
@@ -321,6 +373,10 @@ void degreesOf(const ExprNode& n, std::vector<int>& out) {
     case K::kPow:
       degreesOf(*n.left, out);
       for (int& d : out) d = saturatingMul(d, n.exponent);
+      return;
+    case K::kPolynomial:
+      for (int a = 0; a < n.polynomial->dim(); ++a)
+        out[n.polynomial->axes[a]] = n.polynomial->degree(a);
       return;
   }
 }
@@ -601,6 +657,95 @@ Expression Expression::parse(std::string_view text, std::span<const std::string>
   e.text_ = std::string(text);
   e.slots_ = height(*e.root_) + 1;
   return e;
+}
+
+Expression Expression::constant(int dim, double value) {
+  if (!std::isfinite(value)) throw std::invalid_argument("Expression::constant: not finite");
+  Expression e;
+  e.dim_ = dim;
+  e.root_->value = value;
+  e.root_->enclosureLo = e.root_->enclosureHi = value;
+  e.root_->literal.clear();  // the double itself, exactly
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", value);
+  e.text_ = text;
+  return e;
+}
+
+Expression Expression::variable(int dim, int j, const std::string& name) {
+  if (j < 0 || j >= dim) throw std::invalid_argument("Expression::variable: bad index");
+  Expression e;
+  e.dim_ = dim;
+  e.root_ = makeNode(ExprNode::Kind::kVariable);
+  e.root_->variable = j;
+  e.text_ = name;
+  return e;
+}
+
+Expression Expression::polynomial(int dim, std::shared_ptr<const PiecewiseBernstein> leaf) {
+  leaf->validate();
+  for (int axis : leaf->axes)
+    if (axis < 0 || axis >= dim)
+      throw std::invalid_argument(leaf->name + ": axis out of range for the problem variables");
+  Expression e;
+  e.dim_ = dim;
+  e.root_ = makeNode(ExprNode::Kind::kPolynomial);
+  for (int a = 0; a < leaf->dim(); ++a)
+    e.root_->partials.push_back(std::make_shared<const PiecewiseBernstein>(leaf->derivative(a)));
+  e.text_ = leaf->name;
+  e.root_->polynomial = std::move(leaf);
+  return e;
+}
+
+Expression Expression::join(ExprNode::Kind kind, const char* op, const Expression& a,
+                            const Expression* b) {
+  if (b && a.dim_ != b->dim_)
+    throw std::invalid_argument("Expression: operands in different numbers of variables");
+  // Long operand texts are elided: built expressions can be large.
+  const auto shown = [](const std::string& t) { return t.size() > 80 ? std::string("...") : t; };
+  Expression e;
+  e.dim_ = a.dim_;
+  e.root_ = makeNode(kind);
+  e.root_->left = clone(*a.root_);
+  if (b) {
+    e.root_->right = clone(*b->root_);
+    e.text_ = "(" + shown(a.text_) + op + shown(b->text_) + ")";
+  } else {
+    e.text_ = std::string(op) + "(" + shown(a.text_) + ")";
+  }
+  e.slots_ = height(*e.root_) + 1;
+  return e;
+}
+
+Expression operator+(const Expression& a, const Expression& b) {
+  return Expression::join(ExprNode::Kind::kAdd, " + ", a, &b);
+}
+Expression operator-(const Expression& a, const Expression& b) {
+  return Expression::join(ExprNode::Kind::kSub, " - ", a, &b);
+}
+Expression operator*(const Expression& a, const Expression& b) {
+  return Expression::join(ExprNode::Kind::kMul, " * ", a, &b);
+}
+Expression operator-(const Expression& a) {
+  return Expression::join(ExprNode::Kind::kNeg, "-", a, nullptr);
+}
+
+std::vector<double> Expression::breaks(int j) const {
+  std::vector<double> out;
+  std::vector<const ExprNode*> stack{root_.get()};
+  while (!stack.empty()) {
+    const ExprNode* n = stack.back();
+    stack.pop_back();
+    if (n->left) stack.push_back(n->left.get());
+    if (n->right) stack.push_back(n->right.get());
+    if (n->kind != ExprNode::Kind::kPolynomial) continue;
+    const auto& leaf = *n->polynomial;
+    for (int a = 0; a < leaf.dim(); ++a)
+      if (leaf.axes[a] == j) out.insert(out.end(), leaf.breaks[a].begin(), leaf.breaks[a].end());
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
 }
 
 std::vector<int> Expression::degrees() const {

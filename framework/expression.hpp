@@ -13,6 +13,7 @@
 #include "bernstein.hpp"
 #include "box.hpp"
 #include "interval.hpp"
+#include "piecewise.hpp"
 #include "scalar.hpp"
 
 namespace ndc {
@@ -31,14 +32,20 @@ class ExpressionError : public std::runtime_error {
 
 /// A node of the syntax tree.
 struct ExprNode {
-  enum class Kind { kNumber, kVariable, kAdd, kSub, kMul, kDiv, kPow, kNeg };
+  enum class Kind { kNumber, kVariable, kAdd, kSub, kMul, kDiv, kPow, kNeg, kPolynomial };
   Kind kind;
-  std::string literal;  ///< kNumber: the decimal text, kept so Mpfr parses it exactly
-  double value = 0;     ///< kNumber: the literal rounded to the nearest double (cached)
+  /// kNumber: the decimal text, kept so Mpfr parses it exactly; empty when the number is the
+  /// double `value` exactly (numbers built by Expression::constant)
+  std::string literal;
+  double value = 0;  ///< kNumber: the literal rounded to the nearest double (cached)
   double enclosureLo = 0, enclosureHi = 0;  ///< kNumber: a double interval holding the literal
   int variable = -1;                        ///< kVariable: index into the variable list
   int exponent = 0;                         ///< kPow: the non-negative integer exponent
   std::unique_ptr<ExprNode> left, right;    ///< operands (kNeg and kPow use left only)
+  /// kPolynomial: the piecewise Bernstein leaf, and its partial derivative along each local
+  /// axis (for gradients)
+  std::shared_ptr<const PiecewiseBernstein> polynomial;
+  std::vector<std::shared_ptr<const PiecewiseBernstein>> partials;
 };
 
 /// A parsed polynomial expression in the variables `x_0..x_{n-1}`.
@@ -58,6 +65,26 @@ class Expression {
 
   /// Parses `text` with the given variable names; throws ExpressionError.
   static Expression parse(std::string_view text, std::span<const std::string> variables);
+
+  /// The constant `value` (exactly this double) in `dim` variables.
+  static Expression constant(int dim, double value);
+  /// The variable `x_j` of `dim` variables, written `name` in the text.
+  static Expression variable(int dim, int j, const std::string& name);
+  /// A piecewise Bernstein polynomial leaf in `dim` variables (its axes are variables of
+  /// these). Application problems are built from such leaves with `+ - *`, so their Bernstein
+  /// forms come from Bernstein arithmetic on the input control points (no power basis).
+  /// Throws std::invalid_argument when the leaf is invalid or uses a variable >= dim.
+  static Expression polynomial(int dim, std::shared_ptr<const PiecewiseBernstein> leaf);
+  /// Sum, difference and product (same dim), and negation.
+  friend Expression operator+(const Expression& a, const Expression& b);
+  friend Expression operator-(const Expression& a, const Expression& b);
+  friend Expression operator*(const Expression& a, const Expression& b);
+  friend Expression operator-(const Expression& a);
+  /// Replaces the text (e.g. a name for a long built expression).
+  void setText(std::string text) { text_ = std::move(text); }
+  /// The break values of the piecewise leaves along variable j, sorted and unique (empty
+  /// when no leaf is cut along j).
+  std::vector<double> breaks(int j) const;
 
   /// Number of variables n.
   int dim() const { return dim_; }
@@ -85,6 +112,9 @@ class Expression {
   Bernstein<S> toBernstein(const Box<S>& domain) const;
 
  private:
+  /// A node of `kind` over copies of `a` and (for binary kinds) `*b`.
+  static Expression join(ExprNode::Kind kind, const char* op, const Expression& a,
+                         const Expression* b);
   int dim_ = 0;
   int slots_ = 1;  ///< evaluation slots the gradient evaluator needs: tree height + 1
   std::string text_;

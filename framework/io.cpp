@@ -1,5 +1,7 @@
 #include "io.hpp"
 
+#include "application.hpp"
+
 #include <unistd.h>
 #include <cmath>
 #include <cstdio>
@@ -87,17 +89,30 @@ std::string toJson(const Summary& s) {
   o << "  \"timing_s\": {\"subdivision\": " << number(s.tSubdivision)
     << ", \"projection\": " << number(s.tProjection)
     << ", \"connection\": " << number(s.tConnection) << ", \"analysis\": " << number(s.tAnalysis)
-    << ", \"total\": " << number(s.tTotal) << "}\n}\n";
+    << ", \"total\": " << number(s.tTotal) << "}";
+  // Extension (application problems): which application, and where its image map is singular.
+  if (!s.application.empty())
+    o << ",\n  \"application\": {\"name\": " << quoted(s.application)
+      << ", \"image_singular_vertices\": " << s.imageSingularVertices
+      << ", \"singular_meaning\": " << quoted(s.singularName) << "}";
+  o << "\n}\n";
   return o.str();
 }
 
 void writePly(std::ostream& out, const RunResult& r) {
   const std::size_t vertexCount = r.n ? r.vertices.size() / r.n : 0;
   const std::size_t simplexCount = r.simplices.size() / (r.k + 1);
+  const ApplicationData* app = r.application.get();
+  const bool second = app && app->secondImage;
   out << "ply\nformat ascii 1.0\ncomment ndcontour " << NDC_VERSION << " problem "
-      << r.summary.problem << "\nelement vertex " << vertexCount << "\n";
+      << r.summary.problem << "\n";
+  if (app)
+    out << "comment application " << app->name
+        << ": x y z is the image in R^3, u0.. the surface parameters\n";
+  out << "element vertex " << vertexCount << "\n";
   out << "property double x\nproperty double y\nproperty double z\n";
   for (int j = 0; j < r.n; ++j) out << "property double u" << j << "\n";
+  if (second) out << "property double x2\nproperty double y2\nproperty double z2\n";
   if (r.k == 1) {
     out << "element edge " << simplexCount << "\nproperty int vertex1\nproperty int vertex2\n";
   } else {
@@ -106,6 +121,18 @@ void writePly(std::ostream& out, const RunResult& r) {
   out << "end_header\n";
   for (std::size_t v = 0; v < vertexCount; ++v) {
     const double* p = r.vertices.data() + v * r.n;
+    const std::span<const double> x(p, static_cast<std::size_t>(r.n));
+    if (app) {
+      // The application's map to R^3, and the surface parameters of B-spline variables.
+      for (double c : app->image(x)) out << number(c) << ' ';
+      for (int j = 0; j < r.n; ++j)
+        out << number(app->parameter(j, p[j])) << (j + 1 < r.n || second ? ' ' : '\n');
+      if (second) {
+        const auto y = (*app->secondImage)(x);
+        out << number(y[0]) << ' ' << number(y[1]) << ' ' << number(y[2]) << '\n';
+      }
+      continue;
+    }
     // The 3-D image: the first three coordinates, zero-padded.
     for (int j = 0; j < 3; ++j) out << number(j < r.n ? p[j] : 0.0) << ' ';
     for (int j = 0; j < r.n; ++j) out << number(p[j]) << (j + 1 < r.n ? ' ' : '\n');
@@ -139,6 +166,41 @@ void writeCellsCsv(std::ostream& out, const RunResult& r) {
   }
 }
 
+void writeInputPly(std::ostream& out, const TriangleSoup& input) {
+  out << "ply\nformat ascii 1.0\ncomment ndcontour input surfaces\nelement vertex "
+      << input.vertices.size() << "\nproperty double x\nproperty double y\nproperty double z\n"
+      << "element face " << input.triangles.size()
+      << "\nproperty list uchar int vertex_indices\nproperty int part\nend_header\n";
+  for (const auto& v : input.vertices)
+    out << number(v[0]) << ' ' << number(v[1]) << ' ' << number(v[2]) << '\n';
+  for (std::size_t t = 0; t < input.triangles.size(); ++t)
+    out << "3 " << input.triangles[t][0] << ' ' << input.triangles[t][1] << ' '
+        << input.triangles[t][2] << ' ' << input.part[t] << '\n';
+}
+
+void writeRuledPly(std::ostream& out, const RunResult& r) {
+  // Each polyline edge (a, b) sweeps the quad S1(a) S2(a) S2(b) S1(b) of bitangent segments.
+  const ApplicationData& app = *r.application;
+  const std::size_t vertexCount = r.n ? r.vertices.size() / r.n : 0;
+  const std::size_t edgeCount = r.simplices.size() / 2;
+  out << "ply\nformat ascii 1.0\ncomment ndcontour ruled surface of bitangent segments\n"
+      << "element vertex " << 2 * vertexCount
+      << "\nproperty double x\nproperty double y\nproperty double z\nelement face " << 2 * edgeCount
+      << "\nproperty list uchar int vertex_indices\nend_header\n";
+  for (int which = 0; which < 2; ++which)
+    for (std::size_t v = 0; v < vertexCount; ++v) {
+      const std::span<const double> x(r.vertices.data() + v * r.n, static_cast<std::size_t>(r.n));
+      const auto y = which == 0 ? app.image(x) : (*app.secondImage)(x);
+      out << number(y[0]) << ' ' << number(y[1]) << ' ' << number(y[2]) << '\n';
+    }
+  for (std::size_t e = 0; e < edgeCount; ++e) {
+    const std::int64_t a = r.simplices[2 * e], b = r.simplices[2 * e + 1];
+    const std::int64_t a2 = a + static_cast<std::int64_t>(vertexCount),
+                       b2 = b + static_cast<std::int64_t>(vertexCount);
+    out << "3 " << a << ' ' << a2 << ' ' << b2 << "\n3 " << a << ' ' << b2 << ' ' << b << '\n';
+  }
+}
+
 void writeOutputs(const std::filesystem::path& dir, const RunResult& result) {
   std::error_code error;
   std::filesystem::create_directories(dir, error);
@@ -150,6 +212,16 @@ void writeOutputs(const std::filesystem::path& dir, const RunResult& result) {
   writeCellsCsv(csv, result);
   writeAtomically(dir, "mesh.ply", ply.str());
   writeAtomically(dir, "cells.csv", csv.str());
+  if (const ApplicationData* app = result.application.get()) {
+    std::ostringstream input;
+    writeInputPly(input, app->input);
+    writeAtomically(dir, "input.ply", input.str());
+    if (app->secondImage && result.k == 1) {
+      std::ostringstream ruled;
+      writeRuledPly(ruled, result);
+      writeAtomically(dir, "ruled.ply", ruled.str());
+    }
+  }
   // summary.json last: its presence marks a finished run.
   writeAtomically(dir, "summary.json", toJson(result.summary));
 }

@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <random>
 #include <variant>
 
 #include "analysis.hpp"
+#include "application.hpp"
 #include "grid.hpp"
 #include "scalar.hpp"
 #include "strategies/bounding/bounding.hpp"
@@ -54,6 +56,42 @@ Box<S> toScalarBox(const Box<double>& box) {
   return out;
 }
 
+/// ZeroSetSubdiv over the B-spline patches of a problem (Problem::roots): each patch is
+/// subdivided on its own, with its own Bernstein forms, down to the cells of the common grid, so
+/// the solution cells (and everything built from them) form one grid across patch boundaries.
+template <class S>
+SolutionCells subdividePatches(const Problem& problem, const Settings& settings,
+                               const Subdivision& subdivision, const Grid& grid,
+                               const Progress& progress) {
+  const int n = grid.n, below = grid.depth - problem.rootLevel;
+  SolutionCells cells;
+  cells.grid = grid;
+  std::vector<std::int32_t> global(n);
+  const double roots = static_cast<double>(problem.roots.size());
+  for (std::size_t r = 0; r < problem.roots.size(); ++r) {
+    const Box<double>& root = problem.roots[r];
+    Grid sub{n, below, root};
+    const Bounding<S> bounding =
+        createBounding<S>(settings.bounding, problem, toScalarBox<S>(root));
+    Progress part;
+    if (progress) part = [&](const char* stage, double f) { progress(stage, (r + f) / roots); };
+    const SolutionCells found = subdivide<S>(bounding, subdivision, sub, part);
+    cells.visited += found.visited;
+    // The patch's cell index at level J, then the cell's index inside it.
+    for (std::size_t c = 0; c < found.size(); ++c) {
+      const auto local = found.cell(c);
+      for (int j = 0; j < n; ++j) {
+        const double at = (root.lo[j] - grid.domain.lo[j]) / grid.domain.width(j);
+        const auto patch =
+            static_cast<std::int32_t>(std::llround(at * std::ldexp(1.0, problem.rootLevel)));
+        global[j] = (patch << below) + local[j];
+      }
+      cells.add(global);
+    }
+  }
+  return cells;
+}
+
 template <class S>
 RunResult run(const Problem& problem, const Settings& settings, const Progress& progress) {
   const auto start = Clock::now();
@@ -71,7 +109,18 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   const Grid grid = makeGrid(problem, settings);
   const Box<S> domain = toScalarBox<S>(grid.domain);
   const System<S> system(problem);
-  const Bounding<S> bounding = createBounding<S>(settings.bounding, problem, domain);
+  if (!problem.roots.empty() && settings.jitter)
+    throw InputError(
+        "--jitter cannot be used with B-spline input: the knots must stay on grid planes");
+  if (settings.depth < problem.rootLevel)
+    throw InputError("depth " + std::to_string(settings.depth) + " is below " +
+                     std::to_string(problem.rootLevel) +
+                     ", the level at which every B-spline knot span is a grid cell");
+  // One bounding over the domain, or one per B-spline patch (built in subdividePatches).
+  const std::optional<Bounding<S>> bounding =
+      problem.roots.empty()
+          ? std::optional<Bounding<S>>(createBounding<S>(settings.bounding, problem, domain))
+          : std::nullopt;
   const Subdivision subdivision = createSubdivision(settings.subdivision);
   const Projection<S> projection = createProjection<S>(settings.projection, system);
   const Classification classification = createClassification(settings.classification);
@@ -79,7 +128,9 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
 
   // Alg. 1 (1): ZeroSetSubdiv: the solution cells of the final depth.
   auto t = Clock::now();
-  const SolutionCells cells = subdivide<S>(bounding, subdivision, grid, progress);
+  const SolutionCells cells =
+      bounding ? subdivide<S>(*bounding, subdivision, grid, progress)
+               : subdividePatches<S>(problem, settings, subdivision, grid, progress);
   summary.tSubdivision = secondsSince(t);
   summary.visited = cells.visited;
   summary.solution = static_cast<std::int64_t>(cells.size());
@@ -124,6 +175,20 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
     for (int j = 0; j < problem.n(); ++j) {
       result.cellCentre.push_back(toDouble(S((box.lo[j] + box.hi[j]) / 2)));
       result.cellPoint.push_back(toDouble(projections.at(c)[j]));
+    }
+  }
+  // Application problems: the image map, and where its denominator vanishes on the mesh.
+  if (problem.application) {
+    result.application = problem.application;
+    summary.application = problem.application->name;
+    summary.singularName = problem.application->singularName;
+    const std::size_t count = result.vertices.size() / static_cast<std::size_t>(problem.n());
+    for (std::size_t v = 0; v < count; ++v) {
+      bool singular = false;
+      problem.application->image(
+          std::span<const double>(result.vertices.data() + v * problem.n(), problem.n()),
+          &singular);
+      summary.imageSingularVertices += singular;
     }
   }
   summary.tTotal = secondsSince(start);

@@ -4,8 +4,10 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
+#include "application.hpp"
 #include "complex.hpp"
 #include "problem.hpp"
 #include "strategy.hpp"
@@ -27,6 +29,8 @@ struct RunResult {
   std::vector<double> cellCentre;
   std::vector<double> cellPoint;
   std::vector<CellClass> cellClass;
+  /// The problem's application data (image map, input surfaces), or null.
+  std::shared_ptr<const ApplicationData> application;
 };
 
 /// Runs the whole pipeline on a problem with the given settings. Strategy names are checked

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "scalar.hpp"
+#include "toml_reader.hpp"
 
 namespace ndc {
 
@@ -22,32 +23,6 @@ std::string oneLine(std::string text) {
   for (char& c : text)
     if (c == '\n' || c == '\r') c = ' ';
   return text;
-}
-
-/// A human name for the type of a TOML node, for "wrong type" messages.
-std::string typeName(const toml::node& node) {
-  switch (node.type()) {
-    case toml::node_type::string:
-      return "a string";
-    case toml::node_type::integer:
-      return "an integer";
-    case toml::node_type::floating_point:
-      return "a float";
-    case toml::node_type::boolean:
-      return "a boolean";
-    case toml::node_type::array:
-      return "an array";
-    case toml::node_type::table:
-      return "a table";
-    case toml::node_type::date:
-      return "a date";
-    case toml::node_type::time:
-      return "a time";
-    case toml::node_type::date_time:
-      return "a date-time";
-    default:
-      return "nothing";
-  }
 }
 
 bool isIdentifier(const std::string& s) {
@@ -129,17 +104,16 @@ std::pair<int, int> stringPosition(const std::string& text, int line, int column
 }
 
 /// Validation of one parsed TOML document; every failure is an InputError at a position.
-class Validator {
+class Validator : public TomlReader {
  public:
-  Validator(const std::string& text, const std::string& file) : text_(text), file_(file) {}
+  using TomlReader::TomlReader;
 
   Problem run(const toml::table& root) {
     Problem p;
-    p.path = file_;
+    p.path = file();
 
-    // Application problems (paper, Sec. 3) have their own tables: a later issue.
-    if (const toml::node* app = root.get("application"))
-      fail(*app, "application problems are not supported yet");
+    // Application problems (paper, Sec. 3) have their own tables.
+    if (root.get("application")) return buildApplication(root, *this);
 
     // Every top-level key must be known: a typo must not silently drop data.
     static const std::set<std::string> kKnown = {"name",   "description", "variables",
@@ -154,7 +128,7 @@ class Validator {
     const toml::node& name = require(root, "name");
     p.name = stringOf(name, "name");
     if (!isProblemName(p.name)) fail(name, "name '" + p.name + "' must match [a-z0-9._-]+");
-    problem_ = p.name;
+    setProblem(p.name);
 
     if (const toml::node* description = root.get("description"))
       p.description = stringOf(*description, "description");
@@ -204,57 +178,11 @@ class Validator {
                           std::to_string(m));
     for (int i = 0; i < m; ++i) p.equations.push_back(parseEquation(eqs[i], i, p.variables));
 
-    if (const toml::node* expect = root.get("expect")) p.expect = parseExpect(*expect);
+    if (const toml::node* expect = root.get("expect")) p.expect = expectOf(*expect);
     return p;
   }
 
  private:
-  [[noreturn]] void fail(const toml::source_region& where, const std::string& message) const {
-    throw InputError::at(file_, static_cast<int>(where.begin.line),
-                         static_cast<int>(where.begin.column), where_() + message);
-  }
-  [[noreturn]] void fail(const toml::node& node, const std::string& message) const {
-    fail(node.source(), message);
-  }
-  /// Prefix naming the problem once its name is known.
-  std::string where_() const { return problem_.empty() ? "" : "problem '" + problem_ + "': "; }
-
-  const toml::node& require(const toml::table& root, const std::string& key) const {
-    const toml::node* node = root.get(key);
-    if (!node) throw InputError::at(file_, 0, 0, where_() + "missing required key '" + key + "'");
-    return *node;
-  }
-
-  std::string stringOf(const toml::node& node, const std::string& what) const {
-    if (const auto* s = node.as_string()) return s->get();
-    fail(node, what + " must be a string, not " + typeName(node));
-  }
-
-  const toml::array& arrayOf(const toml::node& node, const std::string& what) const {
-    if (const auto* a = node.as_array()) return *a;
-    fail(node, what + " must be an array, not " + typeName(node));
-  }
-
-  double numberOf(const toml::node& node, const std::string& what) const {
-    double v;
-    if (const auto* i = node.as_integer())
-      v = static_cast<double>(i->get());
-    else if (const auto* f = node.as_floating_point())
-      v = f->get();
-    else
-      fail(node, what + " must be a number, not " + typeName(node));
-    // TOML allows inf and nan; a domain needs finite bounds.
-    if (!std::isfinite(v)) fail(node, what + " must be finite, not " + format(v));
-    return v;
-  }
-
-  static std::string format(double v) {
-    std::ostringstream s;
-    s.precision(17);
-    s << v;
-    return s.str();
-  }
-
   Expression parseEquation(const toml::node& node, int i,
                            const std::vector<std::string>& variables) const {
     const std::string what = "equation " + std::to_string(i + 1);
@@ -278,41 +206,138 @@ class Validator {
       return e;
     } catch (const ExpressionError& error) {
       // Map the expression column to the file through the string's source position.
-      const auto [line, column] = stringPosition(text_, static_cast<int>(node.source().begin.line),
+      const auto [line, column] = stringPosition(text(), static_cast<int>(node.source().begin.line),
                                                  static_cast<int>(node.source().begin.column),
                                                  std::max(0, error.column() - 1));
-      throw InputError::at(file_, line, column, where_() + what + ": " + error.what());
+      throw InputError::at(file(), line, column, prefix() + what + ": " + error.what());
     } catch (const InputError&) {
       throw;
     } catch (const std::exception& error) {
       fail(node, what + ": " + error.what());
     }
   }
-
-  Expectation parseExpect(const toml::node& node) const {
-    const toml::table* table = node.as_table();
-    if (!table) fail(node, "expect must be a table, not " + typeName(node));
-    Expectation expect;
-    for (auto&& [key, value] : *table) {
-      const std::string k(key.str());
-      const auto* i = value.as_integer();
-      if (!i) fail(value, "expect." + k + " must be an integer, not " + typeName(value));
-      if (k == "components")
-        expect.components = i->get();
-      else if (k == "euler_characteristic")
-        expect.eulerCharacteristic = i->get();
-      else
-        expect.other[k] = i->get();
-    }
-    return expect;
-  }
-
-  const std::string& text_;
-  const std::string& file_;
-  std::string problem_;
 };
 
 }  // namespace
+
+/// A human name for the type of a TOML node, for "wrong type" messages.
+std::string tomlTypeName(const toml::node& node) {
+  switch (node.type()) {
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a float";
+    case toml::node_type::boolean:
+      return "a boolean";
+    case toml::node_type::array:
+      return "an array";
+    case toml::node_type::table:
+      return "a table";
+    case toml::node_type::date:
+      return "a date";
+    case toml::node_type::time:
+      return "a time";
+    case toml::node_type::date_time:
+      return "a date-time";
+    default:
+      return "nothing";
+  }
+}
+
+void TomlReader::fail(const toml::source_region& where, const std::string& message) const {
+  throw InputError::at(file_, static_cast<int>(where.begin.line),
+                       static_cast<int>(where.begin.column), prefix() + message);
+}
+void TomlReader::fail(const toml::node& node, const std::string& message) const {
+  fail(node.source(), message);
+}
+void TomlReader::fail(const std::string& message) const {
+  throw InputError::at(file_, 0, 0, prefix() + message);
+}
+
+const toml::node& TomlReader::require(const toml::table& table, const std::string& key) const {
+  const toml::node* node = table.get(key);
+  if (!node) fail("missing required key '" + key + "'");
+  return *node;
+}
+
+std::string TomlReader::stringOf(const toml::node& node, const std::string& what) const {
+  if (const auto* s = node.as_string()) return s->get();
+  fail(node, what + " must be a string, not " + tomlTypeName(node));
+}
+
+const toml::array& TomlReader::arrayOf(const toml::node& node, const std::string& what) const {
+  if (const auto* a = node.as_array()) return *a;
+  fail(node, what + " must be an array, not " + tomlTypeName(node));
+}
+
+const toml::table& TomlReader::tableOf(const toml::node& node, const std::string& what) const {
+  if (const auto* t = node.as_table()) return *t;
+  fail(node, what + " must be a table, not " + tomlTypeName(node));
+}
+
+double TomlReader::numberOf(const toml::node& node, const std::string& what) const {
+  double v;
+  if (const auto* i = node.as_integer())
+    v = static_cast<double>(i->get());
+  else if (const auto* f = node.as_floating_point())
+    v = f->get();
+  else
+    fail(node, what + " must be a number, not " + tomlTypeName(node));
+  // TOML allows inf and nan; geometry and domains need finite values.
+  if (!std::isfinite(v)) fail(node, what + " must be finite, not " + format(v));
+  return v;
+}
+
+long TomlReader::integerOf(const toml::node& node, const std::string& what, long lo,
+                           long hi) const {
+  const auto* i = node.as_integer();
+  if (!i) fail(node, what + " must be an integer, not " + tomlTypeName(node));
+  if (i->get() < lo || i->get() > hi)
+    fail(node, what + " must be between " + std::to_string(lo) + " and " + std::to_string(hi) +
+                   ", got " + std::to_string(i->get()));
+  return static_cast<long>(i->get());
+}
+
+void TomlReader::onlyKeys(const toml::table& table, std::initializer_list<const char*> known,
+                          const std::string& what) const {
+  for (auto&& [key, node] : table) {
+    bool ok = false;
+    for (const char* k : known) ok = ok || key.str() == k;
+    if (ok) continue;
+    std::string list;
+    for (const char* k : known) list += (list.empty() ? "" : ", ") + std::string(k);
+    fail(key.source(),
+         "unknown key '" + std::string(key.str()) + "' in " + what + " (known: " + list + ")");
+  }
+}
+
+std::string TomlReader::format(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+Expectation TomlReader::expectOf(const toml::node& node) const {
+  const toml::table* table = node.as_table();
+  if (!table) fail(node, "expect must be a table, not " + tomlTypeName(node));
+  Expectation expect;
+  for (auto&& [key, value] : *table) {
+    const std::string k(key.str());
+    const auto* i = value.as_integer();
+    if (!i) fail(value, "expect." + k + " must be an integer, not " + tomlTypeName(value));
+    if (k == "components")
+      expect.components = i->get();
+    else if (k == "euler_characteristic")
+      expect.eulerCharacteristic = i->get();
+    else
+      expect.other[k] = i->get();
+  }
+  return expect;
+}
 
 InputError InputError::at(const std::string& file, int line, int column,
                           const std::string& message) {

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -31,6 +32,8 @@ struct Expectation {
   std::map<std::string, long> other;
 };
 
+struct ApplicationData;  // framework/application.hpp
+
 /// A validated problem: `m = n - k` polynomial constraints in n variables on a box.
 struct Problem {
   std::string path;  ///< the file it came from
@@ -40,6 +43,13 @@ struct Problem {
   Box<double> domain;
   std::vector<Expression> equations;
   Expectation expect;
+  /// Application problems (paper Sec. 3): image map, input geometry; null for plain problems.
+  std::shared_ptr<const ApplicationData> application;
+  /// Sub-boxes of the domain on each of which every equation is one polynomial (the patches of
+  /// B-spline input after Bezier extraction). Each must be a cell of the grid at `rootLevel`
+  /// (2^rootLevel cells per axis). Empty: the whole domain is one patch.
+  std::vector<Box<double>> roots;
+  int rootLevel = 0;
 
   int n() const { return static_cast<int>(variables.size()); }
   int m() const { return static_cast<int>(equations.size()); }

@@ -40,6 +40,11 @@ struct Summary {
   std::int64_t visited = 0, solution = 0, normal = 0, abnormal = 0, failed = 0;
   MeshStats mesh;
   std::int64_t ambiguousCells = 0, singularCells = 0;
+  /// Application problems only (empty name otherwise): the application, and how many mesh
+  /// vertices have an image denominator too close to 0 (e.g. the bisector determinant).
+  std::string application;
+  std::string singularName;
+  std::int64_t imageSingularVertices = 0;
   double tSubdivision = 0, tProjection = 0, tConnection = 0, tAnalysis = 0, tTotal = 0;
 };
 

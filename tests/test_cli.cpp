@@ -169,7 +169,7 @@ TEST_CASE("cli: every class of bad problem file exits 2 with one line", "[cli]")
       {"unknown-key.toml", kValid + "colour = \"red\"\n", "unknown key 'colour'"},
       {"wrong-type.toml", "name = \"p\"\nvariables = \"x y\"\n", "variables must be an array"},
       {"one-variable.toml", "name = \"p\"\nvariables = [\"x\"]\n", "at least 2 variables"},
-      {"application.toml", "application = \"bisector\"\n" + kValid, "not supported yet"},
+      {"application.toml", "application = \"bisector\"\n" + kValid, "in an application problem"},
       {"duplicate-variable.toml", "name = \"p\"\nvariables = [\"x\", \"x\"]\n", "listed twice"},
   };
   for (const Case& c : cases) {

@@ -166,8 +166,11 @@ TEST_CASE("missing keys, unknown keys and wrong types", "[problem]") {
              "bad.toml: ", "missing required key 'equations'");
 
   checkError(problemText() + "foo = 1\n", "bad.toml:5:1:", "unknown key 'foo'");
-  checkError("application = \"bisector\"\n" + problemText(),
-             "bad.toml:1:", "application problems are not supported yet");
+  // An application problem has its own tables: plain keys are unknown there.
+  checkError("application = \"bisector\"\n" + problemText(), "bad.toml:4:1:",
+             "unknown key 'domain' in an application problem");
+  checkError("name = \"p\"\napplication = \"smoothing\"\n", "bad.toml:2:",
+             "unknown application 'smoothing'");
 
   checkError("name = 3\n", "bad.toml:1:8:", "name must be a string, not an integer");
   checkError(problemText(R"("x^2 + y^2 - 1")"),

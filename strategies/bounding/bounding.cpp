@@ -145,6 +145,11 @@ int totalDegree(const ExprNode& node) {
     case K::kDiv:  // the divisor is a constant
     case K::kNeg:
       return totalDegree(*node.left);
+    case K::kPolynomial: {
+      int d = 0;
+      for (int a = 0; a < node.polynomial->dim(); ++a) d += node.polynomial->degree(a);
+      return std::min(d, 2);
+    }
     case K::kPow: {
       const int d = totalDegree(*node.left);
       return node.exponent == 0 || d == 0 ? 0 : (node.exponent == 1 ? d : 2);
@@ -191,8 +196,13 @@ void LinearizedBounding<S>::compile(const ExprNode& node, std::vector<Op>& tape,
   maxDepth = std::max(maxDepth, depth + 1);
   Op op{Op::kConst, 0, S(0), S(0)};
   switch (node.kind) {
+    case K::kPolynomial:
+      op.kind = Op::kLeaf;
+      op.leaf = &node;
+      break;
     case K::kNumber: {
-      const Interval<S> literal = Interval<S>::fromString(node.literal);
+      const Interval<S> literal = node.literal.empty() ? Interval<S>(S(node.value))
+                                                       : Interval<S>::fromString(node.literal);
       op.mid = literal.midpoint();
       op.rad = std::max(literal.upper() - op.mid, op.mid - literal.lower()) *
                (S(1) + 8 * ScalarTraits<S>::epsilon());
@@ -300,12 +310,30 @@ bool LinearizedBounding<S>::run(const std::vector<Op>& tape, std::span<const S> 
   S tm, tr, sm, sr, fm, fr;  // temporaries of the products
   std::size_t top = 0;       // number of occupied slots
   for (const Op& op : tape) {
-    if (op.kind == Op::kConst || op.kind == Op::kVar) {
+    if (op.kind == Op::kConst || op.kind == Op::kVar || op.kind == Op::kLeaf) {
       S* m = &stackMid_[top * stride];
       S* r = &stackRad_[top * stride];
       ++top;
       for (std::size_t q = 1; q < stride; ++q) m[q] = r[q] = 0;
-      if (op.kind == Op::kConst) {
+      if (op.kind == Op::kLeaf) {
+        // Interval enclosures of the leaf and its partials over the box, as midpoint-radius.
+        const PiecewiseBernstein& leaf = *op.leaf->polynomial;
+        Interval<S> local[8];
+        for (int a = 0; a < leaf.dim(); ++a) {
+          const int j = leaf.axes[a];
+          local[a] = Interval<S>(c_[j] - radius[j], c_[j] + radius[j]);
+        }
+        const std::span<const Interval<S>> span(local, static_cast<std::size_t>(leaf.dim()));
+        const auto assign = [&](const Interval<S>& v, S& mid, S& rad) {
+          mid = v.midpoint();
+          rad = std::max(v.upper() - mid, mid - v.lower()) * up;
+        };
+        assign(leaf.enclose<S>(span), m[0], r[0]);
+        if (gradient)
+          for (int a = 0; a < leaf.dim(); ++a)
+            assign(op.leaf->partials[a]->template enclose<S>(span), m[leaf.axes[a] + 1],
+                   r[leaf.axes[a] + 1]);
+      } else if (op.kind == Op::kConst) {
         m[0] = op.mid;
         r[0] = op.rad;
       } else {

@@ -155,9 +155,10 @@ class LinearizedBounding final {
  private:
   /// One instruction of an equation compiled to postfix form (evaluated on a stack).
   struct Op {
-    enum Kind { kConst, kVar, kAdd, kSub, kMul, kDiv, kPow, kNeg } kind;
+    enum Kind { kConst, kVar, kAdd, kSub, kMul, kDiv, kPow, kNeg, kLeaf } kind;
     int arg = 0;  ///< kVar: variable index; kPow: exponent
     S mid, rad;   ///< kConst: the literal as midpoint and radius
+    const ExprNode* leaf = nullptr;  ///< kLeaf: the piecewise Bernstein leaf node
   };
   static void compile(const ExprNode& node, std::vector<Op>& tape, int depth, int& maxDepth);
   /// Runs `tape` in midpoint-radius arithmetic with every rounding absorbed in the radii;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <unordered_map>
 #include <vector>
 
@@ -334,9 +335,32 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
     domain.lo.push_back(S(grid.domain.lo[j]));
     domain.hi.push_back(S(grid.domain.hi[j]));
   }
-  std::vector<Bernstein<S>> rootPatches;
-  for (const auto& e : in.system.equations())
-    rootPatches.push_back(e.template toBernstein<S>(domain));
+  // The Bernstein forms each cell's are restricted from: of the domain, or (B-spline input) of
+  // the patch holding the cell, built when first needed.
+  const Problem& problem = in.problem;
+  std::map<CellKey, std::vector<Bernstein<S>>> patchForms;
+  std::vector<std::int32_t> patchIndex(n);
+  const auto formsFor = [&](std::span<const std::int32_t> ci) -> const std::vector<Bernstein<S>>& {
+    const int below = grid.depth - problem.rootLevel;
+    CellKey key = 0;
+    for (int j = 0; j < n; ++j) {
+      patchIndex[j] = ci[j] >> below;
+      key = key * (CellKey{1} << problem.rootLevel) + static_cast<CellKey>(patchIndex[j]);
+    }
+    auto it = patchForms.find(key);
+    if (it != patchForms.end()) return it->second;
+    Box<S> patch;
+    const S cells = S(static_cast<double>(std::int64_t{1} << problem.rootLevel));
+    for (int j = 0; j < n; ++j) {
+      const S w = (domain.hi[j] - domain.lo[j]) / cells;
+      patch.lo.push_back(domain.lo[j] + w * S(static_cast<double>(patchIndex[j])));
+      patch.hi.push_back(domain.lo[j] + w * S(static_cast<double>(patchIndex[j] + 1)));
+    }
+    std::vector<Bernstein<S>> forms;
+    for (const auto& e : in.system.equations())
+      forms.push_back(e.template toBernstein<S>(problem.roots.empty() ? domain : patch));
+    return patchForms.emplace(key, std::move(forms)).first->second;
+  };
 
   const std::size_t count = cells.size();
   std::vector<std::uint8_t> uncertain(count, 0);
@@ -375,6 +399,7 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
     };
     const auto solveFace = [&](std::initializer_list<int> fixed) {
       if (!restricted) {
+        const std::vector<Bernstein<S>>& rootPatches = formsFor(ci);
         for (int i = 0; i < m; ++i) cellPatches[i] = rootPatches[i].restrict(box);
         restricted = true;
       }

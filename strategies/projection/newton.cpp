@@ -33,7 +33,7 @@ template <class S>
 S constantValue(const ExprNode& node) {
   switch (node.kind) {
     case ExprNode::Kind::kNumber:
-      return ScalarTraits<S>::fromString(node.literal);
+      return node.literal.empty() ? S(node.value) : ScalarTraits<S>::fromString(node.literal);
     case ExprNode::Kind::kAdd:
       return constantValue<S>(*node.left) + constantValue<S>(*node.right);
     case ExprNode::Kind::kSub:
@@ -50,6 +50,7 @@ S constantValue(const ExprNode& node) {
       return result;
     }
     case ExprNode::Kind::kVariable:
+    case ExprNode::Kind::kPolynomial:
       break;
   }
   throw std::logic_error("newton: division by a non-constant expression");
@@ -68,12 +69,21 @@ static int compileMagnitude(const ExprNode& node, std::vector<Op>& program,
     case Kind::kNumber:
       // A decimal literal is rounded once when it is read.
       ++ops;
-      constants.push_back(abs(ScalarTraits<S>::fromString(node.literal)));
+      constants.push_back(abs(node.literal.empty() ? S(node.value)
+                                                   : ScalarTraits<S>::fromString(node.literal)));
       program.push_back({Op::Kind::kConstant, static_cast<int>(constants.size()) - 1});
       return 0;
     case Kind::kVariable:
       program.push_back({Op::Kind::kVariable, node.variable});
       return 1;
+    case Kind::kPolynomial: {
+      // |leaf| <= its largest |coefficient| near its pieces; de Casteljau rounds once per step.
+      const PiecewiseBernstein& leaf = *node.polynomial;
+      for (int a = 0; a < leaf.dim(); ++a) ops += leaf.degree(a) * (leaf.degree(a) + 1);
+      constants.push_back(S(leaf.maxAbsCoefficient()));
+      program.push_back({Op::Kind::kConstant, static_cast<int>(constants.size()) - 1});
+      return 0;
+    }
     case Kind::kNeg:
       // Negation is exact and does not change magnitudes.
       return compileMagnitude<S>(*node.left, program, constants, ops);
