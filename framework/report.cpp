@@ -855,6 +855,7 @@ Artefact figDegeneracyVsN(const std::string& id, const CsvTable& t) {
   int nMin = 100, nMax = 0;
   const char* colours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b"};
   const std::vector<Group> series = groupBy(t, seriesKeys, ok);
+  std::map<int, double> sphereMean;  // mean share per n of the first k = 2 series
   for (std::size_t s = 0; s < series.size(); ++s) {
     const Group& g = series[s];
     const std::string k = g.key[0];
@@ -894,6 +895,8 @@ Artefact figDegeneracyVsN(const std::string& id, const CsvTable& t) {
       if (!vary.empty()) row.insert(row.begin() + 1, settingsLabel(t, g.rows[0], vary));
       data.rows.push_back(std::move(row));
     }
+    if (k == "2" && sphereMean.empty())
+      for (const auto& [n, mean] : trend) sphereMean[n] = mean;
     const std::string name = "s" + std::to_string(s);
     gp.data(name + "mean", means);
     gp.data(name + "runs", points);
@@ -931,6 +934,31 @@ Artefact figDegeneracyVsN(const std::string& id, const CsvTable& t) {
                     k + ").");
   }
   if (!plots.empty()) {
+    // The paper's Table 1 (surfaces, k = 2, freeform inputs) at its dimensions, for reference.
+    std::vector<std::vector<double>> paper;
+    std::map<int, std::vector<double>> paperByN;
+    for (const PaperRow& p : kPaperTable1) {
+      paper.push_back({p.n + 0.0, p.share});
+      paperByN[p.n].push_back(p.share);
+    }
+    gp.data("paper", paper);
+    plots.push_back(
+        "$paper with points pt 2 ps 1.5 lw 2 lc rgb \"black\" title \"paper, Table 1 "
+        "(k = 2, freeform inputs)\"");
+    if (!sphereMean.empty()) {
+      std::vector<std::string> ours, theirs;
+      for (const auto& [n, shares] : paperByN) {
+        const Stats p = summarize(shares);
+        theirs.push_back(p.count > 1 ? formatFixed(p.min, 1) + "-" + formatFixed(p.max, 1) +
+                                           "% at n = " + std::to_string(n)
+                                     : percent(p.mean) + " at n = " + std::to_string(n));
+        const auto it = sphereMean.find(n);
+        ours.push_back(it != sphereMean.end() ? percent(it->second) : std::string("not run"));
+      }
+      a.sentences.push_back("The paper's Table 1 (surfaces from freeform inputs) has " +
+                            join(theirs, ", ") + "; our rotated spheres give " + join(ours, ", ") +
+                            " there.");
+    }
     gp.command("set xrange [" + formatFixed(nMin - 0.5, 1) + ":" + formatFixed(nMax + 0.5, 1) +
                "]");
     gp.command("plot " + join(plots, ", \\\n       "));
@@ -1308,7 +1336,9 @@ Artefact figConvergence(const std::string& id, const CsvTable& t) {
                                double slope) {
       if (!ref.empty() || h.size() < 2 || !(y.back() > 0)) return;
       const double h1 = h.back(), h0 = h.front();
-      ref = {{h0, y.back() * std::pow(h0 / h1, slope)}, {h1, y.back()}};
+      // Half a decade below the data, so that the guide does not hide the curve.
+      const double y1 = 0.3 * y.back();
+      ref = {{h0, y1 * std::pow(h0 / h1, slope)}, {h1, y1}};
     };
     reference(chordRef, chord, 2.0);
     reference(k == 1 ? cellsRef1 : cellsRef2, cells, -static_cast<double>(k));
