@@ -1,0 +1,83 @@
+#!/usr/bin/env bash
+# ply2dat.sh: ASCII PLY (as ndcontour writes it: mesh.ply, input.ply, ruled.ply) -> gnuplot data.
+#
+#   scripts/ply2dat.sh [--props X,Y,Z] [--pm3d] [--part P] FILE.ply
+#       the simplices (triangles or segments) of FILE in the vertex properties X Y Z (default
+#       x,y,z; e.g. x2,y2,z2 for the second contact point of a convex-hull mesh). Each triangle
+#       is a closed polyline a b c a and each segment a b, followed by two blank lines (separate
+#       blocks, so that splot ... with lines draws no lines between them). --pm3d writes each
+#       triangle as a 2 x 2 grid (a b / c c) for `with pm3d` (shaded). --part P keeps only faces whose last face property (`part` of input.ply) is P.
+#   scripts/ply2dat.sh --ruling [--every N] FILE.ply
+#       one segment per N-th vertex from (x, y, z) to (x2, y2, z2): the rulings of a
+#       convex-hull result (the bitangent segments); N = 0 (the default) picks N so that about
+#       150 segments are drawn.
+#
+# Gnuplot reads it through a pipe: splot '< scripts/ply2dat.sh results/torus/mesh.ply' w l
+set -euo pipefail
+
+props="x,y,z"
+mode="simplices"
+every=0
+part=""
+while [[ $# -gt 1 ]]; do
+  case "$1" in
+    --props) props="$2"; shift 2 ;;
+    --pm3d) mode="pm3d"; shift ;;
+    --ruling) mode="ruling"; shift ;;
+    --every) every="$2"; shift 2 ;;
+    --part) part="$2"; shift 2 ;;
+    *) echo "ply2dat.sh: unknown option '$1'" >&2; exit 2 ;;
+  esac
+done
+if [[ $# -ne 1 || ! -r "$1" ]]; then
+  echo "usage: ply2dat.sh [--props X,Y,Z] [--pm3d] [--part P] [--ruling [--every N]] FILE.ply" >&2
+  exit 2
+fi
+if [[ "$mode" == "ruling" ]]; then props="x,y,z,x2,y2,z2"; fi
+
+awk -v props="$props" -v mode="$mode" -v every="$every" -v part="$part" '
+  function fail(msg) { print "ply2dat.sh: " FILENAME ": " msg > "/dev/stderr"; bad = 1; exit 2 }
+  BEGIN { header = 1; nwant = split(props, want, ","); nelem = 0 }
+  # Header: the elements in order, their counts and the vertex properties.
+  header && NR == 1 && $1 != "ply" { fail("not a PLY file") }
+  header && $1 == "format" && $2 != "ascii" { fail("only ASCII PLY is read") }
+  header && $1 == "element" { name[++nelem] = $2; count[nelem] = $3; nprop[nelem] = 0; next }
+  header && $1 == "property" { nprop[nelem]++; if (name[nelem] == "vertex") col[$NF] = nprop[nelem]; next }
+  header && $1 == "end_header" {
+    header = 0
+    for (i = 1; i <= nwant; ++i) if (!(want[i] in col)) fail("no vertex property " want[i])
+    e = 1; left = count[1]; v = 0
+    if (every <= 0) { every = int(count[1] / 150); if (every < 1) every = 1 }
+    next
+  }
+  header { next }
+  # Body: the elements one after the other.
+  {
+    while (left == 0 && e < nelem) { ++e; left = count[e] }
+    --left
+    if (name[e] == "vertex") {
+      for (i = 1; i <= nwant; ++i) coord[v, i] = $(col[want[i]])
+      if (mode == "ruling" && v % every == 0) {
+        print coord[v, 1], coord[v, 2], coord[v, 3]
+        print coord[v, 4], coord[v, 5], coord[v, 6]
+        print ""; print ""
+      }
+      ++v
+      next
+    }
+    if (mode == "ruling") next
+    if (name[e] == "face") {
+      if (part != "" && $NF != part) next
+      a = $2; b = $3; c = $4
+      if (mode == "pm3d") {
+        pt(a); pt(b); print ""; pt(c); pt(c); print ""; print ""
+      } else {
+        pt(a); pt(b); pt(c); pt(a); print ""; print ""
+      }
+    } else if (name[e] == "edge") {
+      pt($1); pt($2); print ""; print ""
+    }
+  }
+  function pt(k) { print coord[k, 1], coord[k, 2], coord[k, 3] }
+  END { if (!bad && header) fail("no end_header") }
+' "$1"
