@@ -2,11 +2,13 @@
 // CSV, resume, failure recording and provenance; the problem generators in-process.
 #include <catch2/catch.hpp>
 
+#include <fcntl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -589,4 +591,63 @@ TEST_CASE("experiment: summary columns, JSON numbers and SHA-256", "[experiment]
   // Two blocks of padding and a message longer than one block.
   CHECK(ndc::sha256Hex(std::string(1000, 'a')) ==
         "41edece42d63e8d9bf515a9ba6932e1c20cbc9f5a5d134645adb5db1b9737ea3");
+}
+
+namespace {
+
+/// Sends standard output and error to /dev/null for its lifetime (runExperiment reports there).
+class Silence {
+ public:
+  Silence() : out_(::dup(STDOUT_FILENO)), err_(::dup(STDERR_FILENO)) {
+    std::fflush(stdout);
+    std::fflush(stderr);
+    const int null = ::open("/dev/null", O_WRONLY);
+    ::dup2(null, STDOUT_FILENO);
+    ::dup2(null, STDERR_FILENO);
+    ::close(null);
+  }
+  ~Silence() {
+    std::fflush(stdout);
+    std::fflush(stderr);
+    ::dup2(out_, STDOUT_FILENO);
+    ::dup2(err_, STDERR_FILENO);
+    ::close(out_);
+    ::close(err_);
+  }
+
+ private:
+  int out_, err_;
+};
+
+}  // namespace
+
+TEST_CASE("experiment: a run killed by a signal is recorded as crashed", "[experiment]") {
+  // A stand-in for ndcontour that crashes at depth 3 and is the real tool otherwise.
+  const fs::path tool = scratch() / "crashing-ndcontour.sh";
+  std::ofstream(tool) << "#!/bin/sh\ncase \"$*\" in *'--depth 3 '*) kill -SEGV $$ ;; esac\nexec "
+                      << quoted(ndc::test::binaryPath()) << " \"$@\"\n";
+  fs::permissions(tool, fs::perms::owner_all);
+  const fs::path config = writeConfig(
+      "crash", "id = \"crash\"\nartefact = \"table\"\ndescription = \"d\"\nproblems = [\"" +
+                   example("circle") + "\"]\ndepths = [3, 4]\n");
+  const fs::path out = scratch() / "crash-out";
+  fs::remove_all(out);
+  ndc::ExperimentOptions options;
+  options.outDir = out;
+  options.jobs = 2;
+  options.executable = tool.string();
+  int status = -1;
+  {
+    const Silence silence;
+    status = ndc::runExperiment(ndc::loadExperimentConfig(config, false), options);
+  }
+  CHECK(status == 1);
+  const auto records = csvRecords(out / "crash" / "crash.csv");
+  REQUIRE(records.size() == 2);
+  CHECK(records[0].at("status") == "crashed");
+  CHECK(records[0].at("exit_code") == "-11");
+  CHECK(contains(records[0].at("error"), "killed by signal 11"));
+  CHECK(records[0].at("mesh.components").empty());
+  CHECK(records[1].at("status") == "ok");
+  CHECK(records[1].at("mesh.components") == "1");
 }
