@@ -63,6 +63,7 @@ std::unique_ptr<ExprNode> clone(const ExprNode& n) {
   if (n.right) node->right = clone(*n.right);
   node->polynomial = n.polynomial;
   node->partials = n.partials;
+  node->leafIndex = n.leafIndex;
   return node;
 }
 
@@ -171,9 +172,22 @@ T leafValue(const PiecewiseBernstein& leaf, std::span<const T> x) {
 
 // ---- Evaluation of the value only ---------------------------------------------------------------
 
-// Recursive evaluation on the tree; for double no heap allocation at all.
+/// Values of the distinct piecewise leaves of a tree during one evaluation: built expressions
+/// refer to the same few leaves many times (ExprNode::leafIndex numbers them).
 template <class T>
-T evalValue(const ExprNode& n, std::span<const T> x) {
+struct LeafMemo {
+  std::vector<T> values;  ///< evalValue: one per leaf; GradientEvaluator: dim + 1 per leaf
+  std::vector<unsigned char> done;
+  void reset(int leaves, std::size_t stride) {
+    if (values.size() < static_cast<std::size_t>(leaves) * stride)
+      values.resize(static_cast<std::size_t>(leaves) * stride, Arith<T>::constant(0));
+    done.assign(static_cast<std::size_t>(leaves), 0);
+  }
+};
+
+// Recursive evaluation on the tree; for double no heap allocation at all (once warm).
+template <class T>
+T evalValue(const ExprNode& n, std::span<const T> x, LeafMemo<T>* memo = nullptr) {
   using K = ExprNode::Kind;
   switch (n.kind) {
     case K::kNumber:
@@ -181,19 +195,26 @@ T evalValue(const ExprNode& n, std::span<const T> x) {
     case K::kVariable:
       return x[n.variable];
     case K::kAdd:
-      return evalValue(*n.left, x) + evalValue(*n.right, x);
+      return evalValue(*n.left, x, memo) + evalValue(*n.right, x, memo);
     case K::kSub:
-      return evalValue(*n.left, x) - evalValue(*n.right, x);
+      return evalValue(*n.left, x, memo) - evalValue(*n.right, x, memo);
     case K::kMul:
-      return evalValue(*n.left, x) * evalValue(*n.right, x);
+      return evalValue(*n.left, x, memo) * evalValue(*n.right, x, memo);
     case K::kDiv:
-      return Arith<T>::divide(evalValue(*n.left, x), evalValue(*n.right, x));
+      return Arith<T>::divide(evalValue(*n.left, x, memo), evalValue(*n.right, x, memo));
     case K::kPow:
-      return Arith<T>::power(evalValue(*n.left, x), n.exponent);
+      return Arith<T>::power(evalValue(*n.left, x, memo), n.exponent);
     case K::kNeg:
-      return -evalValue(*n.left, x);
-    case K::kPolynomial:
-      return leafValue<T>(*n.polynomial, x);
+      return -evalValue(*n.left, x, memo);
+    case K::kPolynomial: {
+      if (!memo || n.leafIndex < 0) return leafValue<T>(*n.polynomial, x);
+      const auto i = static_cast<std::size_t>(n.leafIndex);
+      if (!memo->done[i]) {
+        memo->values[i] = leafValue<T>(*n.polynomial, x);
+        memo->done[i] = 1;
+      }
+      return memo->values[i];
+    }
   }
   throw std::logic_error("Expression: bad node kind");
 }
@@ -207,9 +228,11 @@ class GradientEvaluator {
  public:
   /// `slots` is the tree's height + 1; `work` is scratch the evaluator may resize (a reused
   /// per-thread buffer for double, so the Newton loop does not allocate).
-  GradientEvaluator(int slots, std::span<const T> x, std::vector<T>& work)
-      : x_(x), stride_(x.size() + 1), work_(work) {
+  GradientEvaluator(int slots, int leaves, std::span<const T> x, std::vector<T>& work,
+                    LeafMemo<T>& memo)
+      : x_(x), stride_(x.size() + 1), work_(work), memo_(memo) {
     work_.resize(std::size_t(slots) * stride_, Arith<T>::constant(0));
+    memo_.reset(leaves, stride_);
   }
 
   /// Evaluates `root` into slot 0 and returns the value; the gradient is copied to `gradient`.
@@ -281,12 +304,18 @@ class GradientEvaluator {
         for (std::size_t k = 0; k < stride_; ++k) out[k] = -out[k];
         return;
       case K::kPolynomial: {
-        // The leaf's value, and its partials along its own axes (zero along the others).
-        out[0] = leafValue<T>(*n.polynomial, x_);
-        setZeroGradient(out);
-        const auto& axes = n.polynomial->axes;
-        for (std::size_t a = 0; a < axes.size(); ++a)
-          out[axes[a] + 1] = leafValue<T>(*n.partials[a], x_);
+        // The leaf's value, and its partials along its own axes (zero along the others),
+        // computed once per distinct leaf and evaluation.
+        T* block = &memo_.values[static_cast<std::size_t>(n.leafIndex) * stride_];
+        if (!memo_.done[static_cast<std::size_t>(n.leafIndex)]) {
+          block[0] = leafValue<T>(*n.polynomial, x_);
+          for (std::size_t k = 1; k < stride_; ++k) block[k] = Arith<T>::constant(0);
+          const auto& axes = n.polynomial->axes;
+          for (std::size_t a = 0; a < axes.size(); ++a)
+            block[axes[a] + 1] = leafValue<T>(*n.partials[a], x_);
+          memo_.done[static_cast<std::size_t>(n.leafIndex)] = 1;
+        }
+        for (std::size_t k = 0; k < stride_; ++k) out[k] = block[k];
         return;
       }
     }
@@ -300,7 +329,25 @@ class GradientEvaluator {
   std::span<const T> x_;
   std::size_t stride_;
   std::vector<T>& work_;
+  LeafMemo<T>& memo_;
 };
+
+/// Numbers the distinct leaves of a tree (ExprNode::leafIndex); returns how many there are.
+int indexLeaves(ExprNode& root) {
+  std::vector<const PiecewiseBernstein*> seen;
+  std::vector<ExprNode*> stack{&root};
+  while (!stack.empty()) {
+    ExprNode* n = stack.back();
+    stack.pop_back();
+    if (n->left) stack.push_back(n->left.get());
+    if (n->right) stack.push_back(n->right.get());
+    if (n->kind != ExprNode::Kind::kPolynomial) continue;
+    const auto it = std::find(seen.begin(), seen.end(), n->polynomial.get());
+    n->leafIndex = static_cast<int>(it - seen.begin());
+    if (it == seen.end()) seen.push_back(n->polynomial.get());
+  }
+  return static_cast<int>(seen.size());
+}
 
 // ---- Bernstein form -------------------------------------------------------------------------
 
@@ -641,7 +688,11 @@ Expression::Expression() : root_(makeNode(ExprNode::Kind::kNumber)) {
   text_ = "0";
 }
 Expression::Expression(const Expression& o)
-    : dim_(o.dim_), slots_(o.slots_), text_(o.text_), root_(o.root_ ? clone(*o.root_) : nullptr) {}
+    : dim_(o.dim_),
+      slots_(o.slots_),
+      leaves_(o.leaves_),
+      text_(o.text_),
+      root_(o.root_ ? clone(*o.root_) : nullptr) {}
 Expression::Expression(Expression&&) noexcept = default;
 Expression& Expression::operator=(const Expression& o) {
   if (this != &o) *this = Expression(o);
@@ -694,6 +745,7 @@ Expression Expression::polynomial(int dim, std::shared_ptr<const PiecewiseBernst
     e.root_->partials.push_back(std::make_shared<const PiecewiseBernstein>(leaf->derivative(a)));
   e.text_ = leaf->name;
   e.root_->polynomial = std::move(leaf);
+  e.leaves_ = indexLeaves(*e.root_);
   return e;
 }
 
@@ -714,6 +766,7 @@ Expression Expression::join(ExprNode::Kind kind, const char* op, const Expressio
     e.text_ = std::string(op) + "(" + shown(a.text_) + ")";
   }
   e.slots_ = height(*e.root_) + 1;
+  e.leaves_ = indexLeaves(*e.root_);
   return e;
 }
 
@@ -757,7 +810,16 @@ std::vector<int> Expression::degrees() const {
 template <class S>
 S Expression::evaluate(std::span<const S> x) const {
   checkSize(*this, x, "point");
-  return evalValue<S>(*root_, x);
+  if (leaves_ == 0) return evalValue<S>(*root_, x);
+  if constexpr (std::is_same_v<S, double>) {
+    thread_local LeafMemo<double> memo;
+    memo.reset(leaves_, 1);
+    return evalValue<S>(*root_, x, &memo);
+  } else {
+    LeafMemo<S> memo;
+    memo.reset(leaves_, 1);
+    return evalValue<S>(*root_, x, &memo);
+  }
 }
 
 template <class S>
@@ -766,17 +828,21 @@ S Expression::evaluate(std::span<const S> x, std::span<S> gradient) const {
   checkSize(*this, gradient, "gradient");
   if constexpr (std::is_same_v<S, double>) {
     thread_local std::vector<double> work;
-    return GradientEvaluator<S>(slots_, x, work).run(*root_, gradient);
+    thread_local LeafMemo<double> memo;
+    return GradientEvaluator<S>(slots_, leaves_, x, work, memo).run(*root_, gradient);
   } else {
     std::vector<S> work;
-    return GradientEvaluator<S>(slots_, x, work).run(*root_, gradient);
+    LeafMemo<S> memo;
+    return GradientEvaluator<S>(slots_, leaves_, x, work, memo).run(*root_, gradient);
   }
 }
 
 template <class S>
 Interval<S> Expression::evaluate(std::span<const Interval<S>> x) const {
   checkSize(*this, x, "box");
-  return evalValue<Interval<S>>(*root_, x);
+  LeafMemo<Interval<S>> memo;
+  memo.reset(leaves_, 1);
+  return evalValue<Interval<S>>(*root_, x, &memo);
 }
 
 template <class S>
@@ -785,7 +851,8 @@ Interval<S> Expression::evaluate(std::span<const Interval<S>> x,
   checkSize(*this, x, "box");
   checkSize(*this, gradient, "gradient");
   std::vector<Interval<S>> work;
-  return GradientEvaluator<Interval<S>>(slots_, x, work).run(*root_, gradient);
+  LeafMemo<Interval<S>> memo;
+  return GradientEvaluator<Interval<S>>(slots_, leaves_, x, work, memo).run(*root_, gradient);
 }
 
 template <class S>

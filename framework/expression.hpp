@@ -46,6 +46,9 @@ struct ExprNode {
   /// axis (for gradients)
   std::shared_ptr<const PiecewiseBernstein> polynomial;
   std::vector<std::shared_ptr<const PiecewiseBernstein>> partials;
+  /// kPolynomial: number of the leaf among the tree's distinct leaves (evaluations compute
+  /// each distinct leaf once)
+  int leafIndex = -1;
 };
 
 /// A parsed polynomial expression in the variables `x_0..x_{n-1}`.
@@ -116,7 +119,8 @@ class Expression {
   static Expression join(ExprNode::Kind kind, const char* op, const Expression& a,
                          const Expression* b);
   int dim_ = 0;
-  int slots_ = 1;  ///< evaluation slots the gradient evaluator needs: tree height + 1
+  int slots_ = 1;   ///< evaluation slots the gradient evaluator needs: tree height + 1
+  int leaves_ = 0;  ///< distinct piecewise leaves in the tree
   std::string text_;
   std::unique_ptr<ExprNode> root_;
 };

@@ -201,8 +201,8 @@ void LinearizedBounding<S>::compile(const ExprNode& node, std::vector<Op>& tape,
       op.leaf = &node;
       break;
     case K::kNumber: {
-      const Interval<S> literal = node.literal.empty() ? Interval<S>(S(node.value))
-                                                       : Interval<S>::fromString(node.literal);
+      const Interval<S> literal =
+          node.literal.empty() ? Interval<S>(S(node.value)) : Interval<S>::fromString(node.literal);
       op.mid = literal.midpoint();
       op.rad = std::max(literal.upper() - op.mid, op.mid - literal.lower()) *
                (S(1) + 8 * ScalarTraits<S>::epsilon());
@@ -258,6 +258,13 @@ LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& 
   tapes_.resize(m);
   for (std::size_t i = 0; i < m; ++i) compile(problem.equations[i].root(), tapes_[i], 0, depth);
   stackMid_.assign(static_cast<std::size_t>(depth) * (n + 1), S(0));
+  int leaves = 0;
+  for (const auto& tape : tapes_)
+    for (const Op& op : tape)
+      if (op.kind == Op::kLeaf) leaves = std::max(leaves, op.leaf->leafIndex + 1);
+  leafMid_.assign(static_cast<std::size_t>(leaves) * (n + 1), S(0));
+  leafRad_.assign(static_cast<std::size_t>(leaves) * (n + 1), S(0));
+  leafDone_.assign(static_cast<std::size_t>(leaves), 0);
   stackRad_.assign(static_cast<std::size_t>(depth) * (n + 1), S(0));
   c_.resize(n);
   h_.resize(n);
@@ -309,6 +316,7 @@ bool LinearizedBounding<S>::run(const std::vector<Op>& tape, std::span<const S> 
   const S up = S(1) + 8 * u;
   S tm, tr, sm, sr, fm, fr;  // temporaries of the products
   std::size_t top = 0;       // number of occupied slots
+  std::fill(leafDone_.begin(), leafDone_.end(), 0);
   for (const Op& op : tape) {
     if (op.kind == Op::kConst || op.kind == Op::kVar || op.kind == Op::kLeaf) {
       S* m = &stackMid_[top * stride];
@@ -316,7 +324,15 @@ bool LinearizedBounding<S>::run(const std::vector<Op>& tape, std::span<const S> 
       ++top;
       for (std::size_t q = 1; q < stride; ++q) m[q] = r[q] = 0;
       if (op.kind == Op::kLeaf) {
-        // Interval enclosures of the leaf and its partials over the box, as midpoint-radius.
+        // Interval enclosures of the leaf and its partials over the box, as midpoint-radius,
+        // once per distinct leaf and run.
+        const auto slot = static_cast<std::size_t>(op.leaf->leafIndex);
+        S* memoMid = &leafMid_[slot * stride];
+        S* memoRad = &leafRad_[slot * stride];
+        if (leafDone_[slot]) {
+          for (std::size_t q = 0; q < stride; ++q) m[q] = memoMid[q], r[q] = memoRad[q];
+          continue;
+        }
         const PiecewiseBernstein& leaf = *op.leaf->polynomial;
         Interval<S> local[8];
         for (int a = 0; a < leaf.dim(); ++a) {
@@ -333,6 +349,8 @@ bool LinearizedBounding<S>::run(const std::vector<Op>& tape, std::span<const S> 
           for (int a = 0; a < leaf.dim(); ++a)
             assign(op.leaf->partials[a]->template enclose<S>(span), m[leaf.axes[a] + 1],
                    r[leaf.axes[a] + 1]);
+        for (std::size_t q = 0; q < stride; ++q) memoMid[q] = m[q], memoRad[q] = r[q];
+        leafDone_[slot] = 1;
       } else if (op.kind == Op::kConst) {
         m[0] = op.mid;
         r[0] = op.rad;

@@ -156,8 +156,8 @@ class LinearizedBounding final {
   /// One instruction of an equation compiled to postfix form (evaluated on a stack).
   struct Op {
     enum Kind { kConst, kVar, kAdd, kSub, kMul, kDiv, kPow, kNeg, kLeaf } kind;
-    int arg = 0;  ///< kVar: variable index; kPow: exponent
-    S mid, rad;   ///< kConst: the literal as midpoint and radius
+    int arg = 0;                     ///< kVar: variable index; kPow: exponent
+    S mid, rad;                      ///< kConst: the literal as midpoint and radius
     const ExprNode* leaf = nullptr;  ///< kLeaf: the piecewise Bernstein leaf node
   };
   static void compile(const ExprNode& node, std::vector<Op>& tape, int depth, int& maxDepth);
@@ -166,6 +166,10 @@ class LinearizedBounding final {
   /// the value and the n partial derivatives, else with the value only. False when a divisor
   /// encloses 0 or a value is not finite.
   bool run(const std::vector<Op>& tape, std::span<const S> radius, bool gradient) const;
+  // Per run: the enclosures of each distinct leaf (dim + 1 midpoints and radii per leaf), and
+  // whether they are computed yet (built expressions use the same leaves many times).
+  mutable std::vector<S> leafMid_, leafRad_;
+  mutable std::vector<unsigned char> leafDone_;
 
   BernsteinBounding<S> bernstein_;
   std::vector<std::vector<Op>> tapes_;  // per equation
