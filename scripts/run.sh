@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The README's main command: installs what is missing, builds, runs every experiment config in
-# experiments/configs/ (quick versions by default, full ones with --full) and writes the tables,
-# figures and results/report.md with `ndcontour report`. Results go to results/<id>/ (one id
-# per artefact, the same as its config); a run that is already finished is not run again.
+# experiments/configs/ (quick versions by default, full ones with --full), writes the tables,
+# figures and results/report.md with `ndcontour report`, and builds the paper when pdflatex is
+# installed. Results go to results/<id>/ (one id per artefact, the same as its config); finished
+# runs are not run again.
 #
 # Usage: scripts/run.sh [--full] [--jobs N] [ID ...]
 #   --full     the full grids (paper-scale depths and seeds) instead of the quick ones
@@ -32,7 +33,11 @@ while [[ $# -gt 0 ]]; do
 done
 
 start=$SECONDS
-scripts/build.sh || { echo "run.sh: the build failed" >&2; exit 1; }
+# The tool only (scripts/build.sh also builds the tests, which the experiments do not need).
+scripts/setup.sh || { echo "run.sh: installing the dependencies failed" >&2; exit 1; }
+{ cmake -S . -B build -DCMAKE_BUILD_TYPE=Release > /dev/null &&
+  cmake --build build -j "$(nproc)" --target ndcontour; } ||
+  { echo "run.sh: the build failed" >&2; exit 1; }
 bin=build/bin/ndcontour
 echo "run.sh: built $bin in $((SECONDS - start)) s"
 
@@ -74,6 +79,16 @@ echo "run.sh: writing the report"
 report_flags=(--results results --configs experiments/configs)
 [[ $mode == quick ]] && report_flags+=(--quick)
 "$bin" report "${report_flags[@]}" || status=1
+
+# The paper, where TeX is installed (the configure step defines the target only then).
+if command -v pdflatex > /dev/null 2>&1; then
+  if cmake --build build --target paper > results/paper.log 2>&1; then
+    echo "run.sh: built build/paper/ndcontour.pdf"
+  else
+    echo "run.sh: the paper did not build (see results/paper.log)" >&2
+    status=1
+  fi
+fi
 
 echo "run.sh: $mode run finished in $((SECONDS - start)) s; see results/report.md"
 if [[ ${#failed[@]} -gt 0 ]]; then
