@@ -1538,22 +1538,43 @@ Artefact figApplication(const std::string& id, const CsvTable& t,
   gp.command("unset key");
   for (std::size_t p = 0; p < picks.size(); ++p) {
     const std::size_t r = picks[p];
-    const PlyMesh mesh = readPly(dir / "runs" / t.cell(r, "run") / "mesh.ply");
-    std::vector<std::vector<double>> rows;
-    for (const auto& s : mesh.simplices) {
-      for (int v : s) rows.push_back({mesh.xyz[v][0], mesh.xyz[v][1], mesh.xyz[v][2]});
-      rows.push_back({});
-    }
+    const std::filesystem::path run = dir / "runs" / t.cell(r, "run");
+    const PlyMesh mesh = readPly(run / "mesh.ply");
+    const auto polygons = [](const PlyMesh& m) {
+      std::vector<std::vector<double>> rows;
+      for (const auto& s : m.simplices) {
+        for (int v : s) rows.push_back({m.xyz[v][0], m.xyz[v][1], m.xyz[v][2]});
+        rows.push_back({});
+      }
+      return rows;
+    };
     const std::string name = "mesh" + std::to_string(p);
-    gp.data(name, rows);
+    gp.data(name, polygons(mesh));
+    // An application's input surfaces (input.ply) and ruled surface (ruled.ply, e.g. the
+    // convex hull's bitangent segments) are drawn behind the result, as in Figures 6-10.
+    std::string context;
+    for (const auto& [file, style] :
+         {std::pair<std::string, std::string>{"input",
+                                              "fs transparent solid 0.3 fc rgb "
+                                              "\"#969696\""},
+          std::pair<std::string, std::string>{"ruled",
+                                              "fs transparent solid 0.5 fc rgb "
+                                              "\"#fdae6b\""}}) {
+      if (!std::filesystem::exists(run / (file + ".ply"))) continue;
+      const std::string block = file + std::to_string(p);
+      gp.data(block, polygons(readPly(run / (file + ".ply"))));
+      context += "$" + block + " with polygons " + style + ", ";
+    }
     const bool curve = t.cell(r, "k") == "1";
     gp.command("set title \"" + t.cell(r, "problem") + " (n = " + t.cell(r, "n") + ", depth " +
                t.cell(r, "depth") + ")\"");
-    // Small meshes show their triangles; large ones are shaded by z only.
-    gp.command(mesh.simplices.size() < 4000 ? "set pm3d depthorder border lc rgb \"#3a6ea5\" lw 0.3"
-                                            : "set pm3d depthorder noborder");
-    gp.command(curve ? "splot $" + name + " with lines lw 2 lc rgb \"#08519c\""
-                     : "splot $" + name + " with polygons fc palette z");
+    // Small meshes alone show their triangles; others are shaded by z only.
+    gp.command(mesh.simplices.size() < 4000 && context.empty()
+                   ? "set pm3d depthorder border lc rgb \"#3a6ea5\" lw 0.3"
+                   : "set pm3d depthorder noborder");
+    gp.command("splot " + context +
+               (curve ? "$" + name + " with lines lw 2 lc rgb \"#08519c\""
+                      : "$" + name + " with polygons fc palette z"));
     const bool surface = !curve;
     a.sentences.push_back(
         "`" + t.cell(r, "problem") + "` (n = " + t.cell(r, "n") + ", depth " + t.cell(r, "depth") +
