@@ -1856,7 +1856,7 @@ ReportOutcome writeReport(const ReportSettings& settings, std::ostream& log) {
       outcome.written.push_back(id);
       log << "report: " << id << ": " << a.runs << " runs, " << a.failures.size() << " failed\n";
       sections.push_back(std::move(section));
-    } catch (const InputError& e) {
+    } catch (const std::exception& e) {  // InputError, or a value the builder cannot use
       outcome.errors.push_back(e.what());
       section.status = "error";
       section.body = "**Could not be made**: " + std::string(e.what()) +

@@ -3,8 +3,9 @@
 /// `ndcontour experiment` writes for each experiment (`results/<id>/<id>.csv`, one row per run),
 /// aggregates it, and writes each artefact under the same id as its config: tables as Markdown
 /// (`<id>.md`) and LaTeX (`<id>.tex`), figures as gnuplot scripts (`<id>.gp`) rendered to
-/// `<id>.png` and `<id>.pdf`, and one `results/report.md` with every artefact and a few
-/// sentences computed from the data. The paper (`paper/ndcontour.tex`) includes these files.
+/// `<id>.png` and `<id>.pdf`, the sentences computed from the data as `<id>-summary.tex`, one
+/// `results/applications.tex` listing the application figures, and one `results/report.md`
+/// with every artefact. The paper (`paper/ndcontour.tex`) includes only these files.
 #pragma once
 
 #include <array>
