@@ -7,14 +7,6 @@
 
 namespace ndc {
 
-// The builders live in one file each; until all five are linked in, a missing one is reported
-// as bad input instead of failing the link (weak references).
-Problem buildConvexHull(const ApplicationInput&) __attribute__((weak));
-Problem buildSweepSilhouette(const ApplicationInput&) __attribute__((weak));
-Problem buildBisector(const ApplicationInput&) __attribute__((weak));
-Problem buildSweepEnvelope(const ApplicationInput&) __attribute__((weak));
-Problem buildBlending(const ApplicationInput&) __attribute__((weak));
-
 namespace {
 
 /// Largest degree and number of control points per direction accepted (bounded work).
@@ -214,7 +206,6 @@ Problem buildApplication(const toml::table& root, TomlReader& reader) {
                            {"blending", &buildBlending}};
   for (const Entry& entry : entries) {
     if (in.application != entry.name) continue;
-    if (!entry.build) in.fail("application '" + in.application + "' is not built into this binary");
     Problem p;
     try {
       p = entry.build(in);
