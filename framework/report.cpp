@@ -1683,7 +1683,9 @@ namespace {
 /// provenance record; "" when absent).
 std::string jsonString(const std::string& json, std::initializer_list<std::string_view> keys) {
   for (std::string_view key : keys) {
-    const std::string quoted = "\"" + std::string(key) + "\"";
+    std::string quoted(1, '"');
+    quoted.append(key);
+    quoted += '"';
     std::size_t at = json.find(quoted);
     if (at == std::string::npos) continue;
     at = json.find(':', at + quoted.size());
@@ -1837,16 +1839,29 @@ ReportOutcome writeReport(const ReportSettings& settings, std::ostream& log) {
         if (fs::exists(dir / (id + ".pdf"))) files.push_back("[PDF](" + id + "/" + id + ".pdf)");
       }
       const fs::path provenance = dir / "provenance.json";
-      std::string revision;
+      std::string origin;
       if (fs::exists(provenance)) {
         files.push_back("[provenance](" + id + "/provenance.json)");
         std::ifstream in(provenance);
-        std::ostringstream text;
-        text << in.rdbuf();
-        revision = jsonString(text.str(), {"git_revision", "revision", "commit", "git"});
+        std::ostringstream read;
+        read << in.rdbuf();
+        const std::string text = read.str();
+        // Which code made the results, in which mode, when (provenance.json of the runner).
+        const std::string revision =
+            jsonString(text, {"git_revision", "revision", "commit", "git"});
+        const std::string date = jsonString(text, {"date"});
+        if (!revision.empty()) {
+          origin += "; code revision `";
+          origin += revision.substr(0, 12);
+          origin += '`';
+          if (text.find("\"dirty\": true") != std::string::npos)
+            origin += " with uncommitted changes";
+        }
+        if (text.find("\"quick\": true") != std::string::npos) origin += ", quick grid";
+        if (text.find("\"quick\": false") != std::string::npos) origin += ", full grid";
+        if (!date.empty()) origin += ", run " + date;
       }
-      body += "\nFiles: " + join(files, ", ") +
-              (revision.empty() ? "" : "; code revision `" + revision.substr(0, 12) + "`") + ".\n";
+      body += "\nFiles: " + join(files, ", ") + origin + ".\n";
       section.body = std::move(body);
       section.status = !render_note.empty() && render ? "not rendered"
                        : a.failures.empty()           ? "ok"
