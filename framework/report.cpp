@@ -1539,6 +1539,7 @@ Artefact figApplication(const std::string& id, const CsvTable& t,
   for (std::size_t p = 0; p < picks.size(); ++p) {
     const std::size_t r = picks[p];
     const std::filesystem::path run = dir / "runs" / t.cell(r, "run");
+    a.shownRuns.push_back(t.cell(r, "run"));
     const PlyMesh mesh = readPly(run / "mesh.ply");
     const auto polygons = [](const PlyMesh& m) {
       std::vector<std::vector<double>> rows;
@@ -1819,6 +1820,30 @@ ReportOutcome writeReport(const ReportSettings& settings, std::ostream& log) {
           if (render_note.empty() || fs::exists(dir / (id + ".png")))
             body += "![" + id + "](" + id + "/" + id + ".png)\n\n";
           if (!render_note.empty()) body += render_note + "\n\n";
+        }
+        // Application figures: also each run rendered by the application's own script
+        // (experiments/gnuplot/<application>.gp, `gnuplot -e "dir='RUN'"` writes
+        // RUN/<application>.png), when there is one.
+        fs::path configs = settings.configs;
+        if (!configs.has_filename()) configs = configs.parent_path();
+        const std::string application = id.starts_with("fig-app-") ? id.substr(8) : "";
+        const fs::path script = configs.parent_path() / "gnuplot" / (application + ".gp");
+        if (render && !application.empty() && fs::exists(script)) {
+          std::vector<std::string> failedScripts;
+          for (const std::string& run : a.shownRuns) {
+            const fs::path runDir = fs::absolute(dir / "runs" / run);
+            const std::string command =
+                "gnuplot -e \"dir='" + runDir.string() + "'\" " +
+                shellQuote(fs::absolute(script).string()) + " > " +
+                shellQuote((runDir / (application + ".gnuplot.log")).string()) + " 2>&1";
+            if (std::system(command.c_str()) == 0 && fs::exists(runDir / (application + ".png")))
+              body += "![" + run + "](" + id + "/runs/" + run + "/" + application + ".png)\n\n";
+            else
+              failedScripts.push_back(run);
+          }
+          if (!failedScripts.empty())
+            body += "The script " + script.string() + " failed on " + join(failedScripts, ", ") +
+                    " (see `runs/<run>/" + application + ".gnuplot.log`).\n\n";
         }
         body += paragraph(a.sentences) + "\n\n";
         for (const Table& t : a.tables)

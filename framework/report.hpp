@@ -189,6 +189,7 @@ struct Artefact {
   std::vector<std::string> sentences;  ///< what it shows, computed from the data
   std::size_t runs = 0;                ///< rows of the CSV
   std::vector<std::string> failures;   ///< one line per failed run: run, problem, status, error
+  std::vector<std::string> shownRuns;  ///< figures: the runs (`runs/<run>/`) the figure shows
 };
 
 /// Builds the artefact of experiment `id` from its CSV; `dir` is `results/<id>/` (for the
