@@ -31,5 +31,8 @@ unset colorbox
 set key top right
 set pm3d depthorder border lw 0.2 lc rgb "#603018"
 set pm3d lighting primary 0.55 specular 0.25
+# Each triangle or segment is its own block: without this, splot joins blocks of equal length
+# as a grid and draws spurious lines between separate parts.
+set surface explicit
 splot input with lines lc rgb "#b0b0b0" lw 0.7 title "S_1, S_2", \
       mesh with pm3d fillcolor rgb "#e08a3c" title "blend S_1 + {/Symbol a}_1 N_1"

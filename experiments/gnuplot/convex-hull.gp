@@ -32,6 +32,9 @@ set xyplane 0
 unset border
 unset tics
 set key top right
+# Each triangle or segment is its own block: without this, splot joins blocks of equal length
+# as a grid and draws spurious lines between separate parts.
+set surface explicit
 splot input with lines lc rgb "#c0c0c0" lw 0.7 title "S_1, S_2", \
       ruling with lines lc rgb "#4a86d0" lw 0.8 title "bitangent segments", \
       contact1 with lines lc rgb "#c02020" lw 3 title "contact curves", \
