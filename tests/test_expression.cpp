@@ -82,6 +82,7 @@ double constantValue(const ExprNode& n) {
     case K::kNeg:
       return -constantValue(*n.left);
     case K::kVariable:
+    case K::kPolynomial:  // parsed expressions have no piecewise leaves
       break;
   }
   throw std::logic_error("not a constant");
@@ -109,6 +110,8 @@ double magnitude(const ExprNode& n, const std::vector<double>& bound) {
       return std::pow(magnitude(*n.left, bound), n.exponent);
     case K::kNeg:
       return magnitude(*n.left, bound);
+    case K::kPolynomial:  // parsed expressions have no piecewise leaves
+      break;
   }
   return 0;
 }
