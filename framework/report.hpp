@@ -158,9 +158,9 @@ class GnuplotScript {
 /// Whether `gnuplot` is on PATH.
 bool gnuplotAvailable();
 
-/// Runs `gnuplot -e "out='<id>.tmp'" <id>.gp` in `dir` (output to `<id>.gnuplot.log`) and, on
-/// success, renames `<id>.tmp.png` and `<id>.tmp.pdf` to `<id>.png` and `<id>.pdf`. Returns an
-/// empty string on success, otherwise the reason (the last line of the log).
+/// Runs gnuplot on `ID.gp` in `dir` with the output base `ID.tmp` (log in `ID.gnuplot.log`)
+/// and, on success, renames `ID.tmp.png` and `ID.tmp.pdf` to `ID.png` and `ID.pdf`, where ID is
+/// `id`. Returns an empty string on success, otherwise the reason (the last line of the log).
 std::string renderGnuplot(const std::filesystem::path& dir, const std::string& id);
 
 // --- Reading run outputs -----------------------------------------------------------------------
