@@ -30,6 +30,8 @@
 
 #include "cli/solve_options.hpp"
 #include "generate.hpp"
+#include "io.hpp"
+#include "toml_reader.hpp"
 
 extern char** environ;
 
@@ -56,25 +58,6 @@ std::string oneLine(std::string text) {
   return text;
 }
 
-std::string typeName(const toml::node& node) {
-  switch (node.type()) {
-    case toml::node_type::string:
-      return "a string";
-    case toml::node_type::integer:
-      return "an integer";
-    case toml::node_type::floating_point:
-      return "a float";
-    case toml::node_type::boolean:
-      return "a boolean";
-    case toml::node_type::array:
-      return "an array";
-    case toml::node_type::table:
-      return "a table";
-    default:
-      return "a date or time";
-  }
-}
-
 template <std::size_t N>
 std::string listed(const std::array<std::string_view, N>& names) {
   std::string text;
@@ -95,26 +78,6 @@ std::string readFile(const fs::path& file) {
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
-}
-
-/// Writes `text` to `target` through a temporary file in the same directory renamed into
-/// place, so that a reader never sees a half-written file.
-void writeAtomically(const fs::path& target, const std::string& text) {
-  const fs::path temporary = target.parent_path() / ("." + target.filename().string() + ".tmp" +
-                                                     std::to_string(::getpid()));
-  {
-    std::ofstream out(temporary, std::ios::binary);
-    out << text;
-    out.flush();
-    if (!out) {
-      std::error_code ignored;
-      fs::remove(temporary, ignored);
-      throw InputError(target.string() + ": cannot write the file");
-    }
-  }
-  std::error_code error;
-  fs::rename(temporary, target, error);
-  if (error) throw InputError(target.string() + ": cannot write the file: " + error.message());
 }
 
 std::string jsonQuoted(const std::string& s) {
@@ -252,7 +215,7 @@ class ConfigReader {
     GridFields over;
     if (const toml::node* q = top.get("quick")) {
       const toml::table* table = q->as_table();
-      if (!table) fail(*q, "quick must be a table, not " + typeName(*q));
+      if (!table) fail(*q, "quick must be a table, not " + tomlTypeName(*q));
       static const std::set<std::string> kQuickKeys = {
           "problems",       "bounding",   "subdivision", "connection", "scalar",   "precision",
           "classification", "projection", "depths",      "seeds",      "timeout_s"};
@@ -289,13 +252,13 @@ class ConfigReader {
 
   std::string stringOf(const toml::node& node, const std::string& what) const {
     if (const auto* s = node.as_string()) return s->get();
-    fail(node, what + " must be a string, not " + typeName(node));
+    fail(node, what + " must be a string, not " + tomlTypeName(node));
   }
 
   std::int64_t integerOf(const toml::node& node, const std::string& what, std::int64_t lo,
                          std::int64_t hi) const {
     const auto* i = node.as_integer();
-    if (!i) fail(node, what + " must be an integer, not " + typeName(node));
+    if (!i) fail(node, what + " must be an integer, not " + tomlTypeName(node));
     if (i->get() < lo || i->get() > hi)
       fail(node, what + " = " + std::to_string(i->get()) + " is out of range (accepted: " +
                      std::to_string(lo) + ".." + std::to_string(hi) + ")");
@@ -387,7 +350,7 @@ class ConfigReader {
       else if (const auto* f = n->as_floating_point())
         v = f->get();
       else
-        fail(*n, prefix + "timeout_s must be a number, not " + typeName(*n));
+        fail(*n, prefix + "timeout_s must be a number, not " + tomlTypeName(*n));
       if (!(v > 0 && v <= kMaxTimeoutS))
         fail(*n,
              prefix + "timeout_s must be positive and at most " + jsonNumber(kMaxTimeoutS) + " s");
@@ -411,7 +374,8 @@ class ConfigReader {
         else
           fail(*e, what + ": a problem table needs 'file' or 'generator'");
       } else {
-        fail(*e, what + " must hold problem file paths (strings) or tables, not " + typeName(*e));
+        fail(*e,
+             what + " must hold problem file paths (strings) or tables, not " + tomlTypeName(*e));
       }
       entries.push_back(std::move(entry));
     }

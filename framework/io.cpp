@@ -38,11 +38,11 @@ std::string quoted(const std::string& s) {
   return out + "\"";
 }
 
-/// Writes `text` to `dir/name` through a temporary file renamed into place.
-void writeAtomically(const std::filesystem::path& dir, const std::string& name,
-                     const std::string& text) {
-  const auto target = dir / name;
-  const auto temporary = dir / ("." + name + ".tmp" + std::to_string(::getpid()));
+}  // namespace
+
+void writeAtomically(const std::filesystem::path& target, const std::string& text) {
+  const auto temporary = target.parent_path() /
+                         ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()));
   {
     std::ofstream out(temporary, std::ios::binary);
     out << text;
@@ -57,8 +57,6 @@ void writeAtomically(const std::filesystem::path& dir, const std::string& name,
   std::filesystem::rename(temporary, target, error);
   if (error) throw InputError(target.string() + ": cannot write the file: " + error.message());
 }
-
-}  // namespace
 
 std::string toJson(const Summary& s) {
   std::ostringstream o;
@@ -210,20 +208,20 @@ void writeOutputs(const std::filesystem::path& dir, const RunResult& result) {
   std::ostringstream ply, csv;
   writePly(ply, result);
   writeCellsCsv(csv, result);
-  writeAtomically(dir, "mesh.ply", ply.str());
-  writeAtomically(dir, "cells.csv", csv.str());
+  writeAtomically(dir / "mesh.ply", ply.str());
+  writeAtomically(dir / "cells.csv", csv.str());
   if (const ApplicationData* app = result.application.get()) {
     std::ostringstream input;
     writeInputPly(input, app->input);
-    writeAtomically(dir, "input.ply", input.str());
+    writeAtomically(dir / "input.ply", input.str());
     if (app->secondImage && result.k == 1) {
       std::ostringstream ruled;
       writeRuledPly(ruled, result);
-      writeAtomically(dir, "ruled.ply", ruled.str());
+      writeAtomically(dir / "ruled.ply", ruled.str());
     }
   }
   // summary.json last: its presence marks a finished run.
-  writeAtomically(dir, "summary.json", toJson(result.summary));
+  writeAtomically(dir / "summary.json", toJson(result.summary));
 }
 
 }  // namespace ndc

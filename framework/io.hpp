@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <ostream>
+#include <string>
 
 #include "pipeline.hpp"
 
@@ -16,6 +17,11 @@ void writePly(std::ostream& out, const RunResult& result);
 
 /// Writes cells.csv: cell number, multi-index, centre, class, projected point.
 void writeCellsCsv(std::ostream& out, const RunResult& result);
+
+/// Writes `text` to `target` through a temporary file in the same directory renamed into place,
+/// so that a reader never sees half a file and a failure leaves the previous file alone. Throws
+/// ndc::InputError when the file cannot be written.
+void writeAtomically(const std::filesystem::path& target, const std::string& text);
 
 /// Writes summary.json, mesh.ply and cells.csv into `dir` (created if needed). Each file is
 /// written to a temporary name and renamed into place only when complete, so an existing

@@ -1,6 +1,8 @@
 // Tables and figures from experiment results (issue 6): see report.hpp.
 #include "report.hpp"
 
+#include "io.hpp"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -31,26 +33,6 @@ std::string readText(const std::filesystem::path& file) {
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
-}
-
-/// Writes `text` to `target` through a temporary file renamed into place, so that a reader
-/// never sees half a file and a failure leaves the previous file alone.
-void writeAtomically(const std::filesystem::path& target, const std::string& text) {
-  std::filesystem::path temporary = target;
-  temporary += ".tmp" + std::to_string(::getpid());
-  {
-    std::ofstream out(temporary, std::ios::binary);
-    out << text;
-    out.flush();
-    if (!out) {
-      std::error_code ignored;
-      std::filesystem::remove(temporary, ignored);
-      throw InputError(target.string() + ": cannot write the file");
-    }
-  }
-  std::error_code error;
-  std::filesystem::rename(temporary, target, error);
-  if (error) throw InputError(target.string() + ": cannot write the file: " + error.message());
 }
 
 std::string shellQuote(const std::string& text) {
