@@ -13,56 +13,24 @@
 #include <string>
 
 #include "problem.hpp"
+#include "test_process.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-/// A scratch directory for this test process, removed at exit.
 const fs::path& scratch() {
-  struct Dir {
-    fs::path path = fs::temp_directory_path() / ("ndc-test-cli-" + std::to_string(::getpid()));
-    Dir() { fs::create_directories(path); }
-    ~Dir() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  };
-  static const Dir dir;
-  return dir.path;
+  static const ndc::test::ScratchDir dir("cli");
+  return dir.path();
 }
 
-std::string quoted(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-std::string slurp(const fs::path& file) {
-  std::ifstream in(file);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-struct Run {
-  int status = -1;
-  std::string out, err;
-};
+using ndc::test::quoted;
+using ndc::test::slurp;
+using Run = ndc::test::CliRun;
 
 /// Runs `ndcontour ARGS` (ARGS already shell-quoted) and captures status, stdout and stderr.
-Run ndcontour(const std::string& args) {
-  const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt";
-  const std::string command = quoted(ndc::test::binaryPath()) + " " + args + " >" +
-                              quoted(out.string()) + " 2>" + quoted(err.string()) + " </dev/null";
-  const int raw = std::system(command.c_str());
-  Run run;
-  run.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  run.out = slurp(out);
-  run.err = slurp(err);
-  return run;
-}
+Run ndcontour(const std::string& args) { return ndc::test::runNdcontour(args, scratch()); }
 
 /// Writes `text` to a scratch file and returns its path.
 fs::path writeProblem(const std::string& name, const std::string& text) {
