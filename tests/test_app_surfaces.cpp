@@ -19,6 +19,7 @@
 #include "geometry/freeform.hpp"
 #include "pipeline.hpp"
 #include "problem.hpp"
+#include "test_process.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -335,27 +336,12 @@ TEST_CASE("rolling-ball blend of two perpendicular planes lies on its cylinder",
 
 namespace {
 
-/// A scratch directory for this test process, removed at exit.
 const fs::path& scratch() {
-  struct Dir {
-    fs::path path =
-        fs::temp_directory_path() / ("ndc-test-app-surfaces-" + std::to_string(::getpid()));
-    Dir() { fs::create_directories(path); }
-    ~Dir() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  };
-  static const Dir dir;
-  return dir.path;
+  static const ndc::test::ScratchDir dir("app-surfaces");
+  return dir.path();
 }
 
-std::string slurp(const fs::path& file) {
-  std::ifstream in(file);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using ndc::test::slurp;
 
 /// Runs `ndcontour info FILE` on `text` written to a scratch file: status and standard error.
 std::pair<int, std::string> info(const std::string& text) {

@@ -22,39 +22,21 @@
 #include "generate.hpp"
 #include "io.hpp"
 #include "problem.hpp"
+#include "test_process.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-/// A scratch directory for this test process, removed at exit.
 const fs::path& scratch() {
-  struct Dir {
-    fs::path path =
-        fs::temp_directory_path() / ("ndc-test-experiment-" + std::to_string(::getpid()));
-    Dir() { fs::create_directories(path); }
-    ~Dir() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  };
-  static const Dir dir;
-  return dir.path;
+  static const ndc::test::ScratchDir dir("experiment");
+  return dir.path();
 }
 
-std::string quoted(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
+using ndc::test::quoted;
 
-std::string slurp(const fs::path& file) {
-  std::ifstream in(file);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using ndc::test::slurp;
 
 bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;

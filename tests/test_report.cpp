@@ -15,24 +15,16 @@
 
 #include "problem.hpp"
 #include "report.hpp"
+#include "test_process.hpp"
 
 namespace fs = std::filesystem;
 using namespace ndc::report;
 
 namespace {
 
-/// A scratch directory for this test process, removed at exit.
 const fs::path& scratch() {
-  struct Dir {
-    fs::path path = fs::temp_directory_path() / ("ndc-test-report-" + std::to_string(::getpid()));
-    Dir() { fs::create_directories(path); }
-    ~Dir() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  };
-  static const Dir dir;
-  return dir.path;
+  static const ndc::test::ScratchDir dir("report");
+  return dir.path();
 }
 
 std::string slurp(const fs::path& file) {
