@@ -80,23 +80,6 @@ std::string readFile(const fs::path& file) {
   return text.str();
 }
 
-std::string jsonQuoted(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buffer[8];
-      std::snprintf(buffer, sizeof buffer, "\\u%04x", c);
-      out += buffer;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
-
 /// Shortest decimal text that reads back as the same double ("null" when not finite).
 std::string jsonNumber(double v) {
   if (!std::isfinite(v)) return "null";

@@ -21,7 +21,9 @@ std::string number(double v) {
   return buffer;
 }
 
-std::string quoted(const std::string& s) {
+}  // namespace
+
+std::string jsonQuoted(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
     if (c == '"' || c == '\\') {
@@ -37,8 +39,6 @@ std::string quoted(const std::string& s) {
   }
   return out + "\"";
 }
-
-}  // namespace
 
 void writeAtomically(const std::filesystem::path& target, const std::string& text) {
   const auto temporary = target.parent_path() /
@@ -61,13 +61,14 @@ void writeAtomically(const std::filesystem::path& target, const std::string& tex
 std::string toJson(const Summary& s) {
   std::ostringstream o;
   const Settings& t = s.settings;
-  o << "{\n  \"schema\": \"ndcontour.summary/1\",\n  \"problem\": " << quoted(s.problem)
+  o << "{\n  \"schema\": \"ndcontour.summary/1\",\n  \"problem\": " << jsonQuoted(s.problem)
     << ",\n  \"n\": " << s.n << ",\n  \"k\": " << s.k << ",\n";
-  o << "  \"settings\": {\"depth\": " << t.depth << ", \"bounding\": " << quoted(t.bounding)
-    << ", \"subdivision\": " << quoted(t.subdivision) << ", \"scalar\": " << quoted(t.scalar)
-    << ", \"precision_bits\": " << t.precisionBits << ", \"projection\": " << quoted(t.projection)
-    << ", \"classification\": " << quoted(t.classification)
-    << ", \"connection\": " << quoted(t.connection)
+  o << "  \"settings\": {\"depth\": " << t.depth << ", \"bounding\": " << jsonQuoted(t.bounding)
+    << ", \"subdivision\": " << jsonQuoted(t.subdivision)
+    << ", \"scalar\": " << jsonQuoted(t.scalar) << ", \"precision_bits\": " << t.precisionBits
+    << ", \"projection\": " << jsonQuoted(t.projection)
+    << ", \"classification\": " << jsonQuoted(t.classification)
+    << ", \"connection\": " << jsonQuoted(t.connection)
     << ", \"jitter\": " << (t.jitter ? std::to_string(*t.jitter) : "null") << "},\n";
   o << "  \"cells\": {\"visited\": " << s.visited << ", \"solution\": " << s.solution
     << ", \"normal\": " << s.normal << ", \"abnormal\": " << s.abnormal
@@ -90,9 +91,9 @@ std::string toJson(const Summary& s) {
     << ", \"total\": " << number(s.tTotal) << "}";
   // Extension (application problems): which application, and where its image map is singular.
   if (!s.application.empty())
-    o << ",\n  \"application\": {\"name\": " << quoted(s.application)
+    o << ",\n  \"application\": {\"name\": " << jsonQuoted(s.application)
       << ", \"image_singular_vertices\": " << s.imageSingularVertices
-      << ", \"singular_meaning\": " << quoted(s.singularName) << "}";
+      << ", \"singular_meaning\": " << jsonQuoted(s.singularName) << "}";
   o << "\n}\n";
   return o.str();
 }

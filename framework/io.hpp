@@ -18,6 +18,9 @@ void writePly(std::ostream& out, const RunResult& result);
 /// Writes cells.csv: cell number, multi-index, centre, class, projected point.
 void writeCellsCsv(std::ostream& out, const RunResult& result);
 
+/// `s` as a JSON string literal (quotes, backslashes and control characters escaped).
+std::string jsonQuoted(const std::string& s);
+
 /// Writes `text` to `target` through a temporary file in the same directory renamed into place,
 /// so that a reader never sees half a file and a failure leaves the previous file alone. Throws
 /// ndc::InputError when the file cannot be written.
