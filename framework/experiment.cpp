@@ -65,14 +65,6 @@ std::string listed(const std::array<std::string_view, N>& names) {
   return text;
 }
 
-bool isName(const std::string& s) {
-  if (s.empty()) return false;
-  for (char c : s)
-    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-'))
-      return false;
-  return true;
-}
-
 std::string readFile(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   std::ostringstream text;
@@ -181,7 +173,7 @@ class ConfigReader {
     // id: names every result file, so it must be the file's stem and a safe file name.
     const toml::node& id = require(top, "id");
     c.id = stringOf(id, "id");
-    if (!isName(c.id)) fail(id, "id '" + c.id + "' must match [a-z0-9._-]+");
+    if (!isProblemName(c.id)) fail(id, "id '" + c.id + "' must match [a-z0-9._-]+");
     const std::string stem = fs::path(file_).stem().string();
     if (c.id != stem)
       fail(id, "id '" + c.id + "' must equal the file name without .toml ('" + stem + "')");

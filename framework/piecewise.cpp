@@ -129,7 +129,15 @@ Interval<S> PiecewiseBernstein::enclose(std::span<const Interval<S>> local) cons
     last[a] = pieceOf(breaks[a], local[a].upper());
     current[a] = first[a];
   }
-  std::vector<Interval<S>> work;
+  // Scratch for de Casteljau: reused per thread in double (the bounding calls this per box).
+  std::vector<Interval<S>> owned;
+  thread_local std::vector<Interval<double>> reused;
+  std::vector<Interval<S>>& work = [&]() -> std::vector<Interval<S>>& {
+    if constexpr (std::is_same_v<S, double>)
+      return reused;
+    else
+      return owned;
+  }();
   Interval<S> t[kMaxLeafAxes];
   bool any = false;
   Interval<S> result;

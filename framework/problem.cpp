@@ -32,14 +32,6 @@ bool isIdentifier(const std::string& s) {
   return true;
 }
 
-bool isProblemName(const std::string& s) {
-  if (s.empty()) return false;
-  for (char c : s)
-    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-'))
-      return false;
-  return true;
-}
-
 /// Position in the file of byte `target` (0-based) of the decoded value of the TOML string
 /// whose opening quote is at (line, column). Decodes escapes and multi-line strings so that an
 /// expression column lands on the right character of the file; falls back to the quote.
@@ -337,6 +329,14 @@ Expectation TomlReader::expectOf(const toml::node& node) const {
       expect.other[k] = i->get();
   }
   return expect;
+}
+
+bool isProblemName(const std::string& s) {
+  if (s.empty()) return false;
+  for (char c : s)
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-'))
+      return false;
+  return true;
 }
 
 InputError InputError::at(const std::string& file, int line, int column,

@@ -64,6 +64,10 @@ struct Problem {
 /// equation may have; larger ones are rejected as bad input rather than exhausting memory.
 inline constexpr double kMaxCoefficients = 1e6;
 
+/// Whether `s` is a valid problem or experiment name: `[a-z0-9._-]+` (it names files and
+/// result folders).
+bool isProblemName(const std::string& s);
+
 /// Reads and validates a problem file; throws InputError.
 Problem loadProblem(const std::filesystem::path& file);
 /// Parses and validates problem text (`file` is used in messages); throws InputError.

@@ -316,6 +316,7 @@ TEST_CASE("application files: bad freeform input exits 2 with one line", "[geome
       {head + "[motion]\ntranslation = [[0,0,0]]\n", "missing required key 'rotation'"},
       {head + "eye = [0, 0]\n", "[x, y, z]"},
       {"name = \"bad\"\napplication = \"smoothing\"\n", "unknown application 'smoothing'"},
+      {"name = \"Bad Name\"\napplication = \"bisector\"\n", "must match [a-z0-9._-]+"},
   };
   int index = 0;
   for (const auto& [text, message] : cases) {

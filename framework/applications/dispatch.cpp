@@ -173,6 +173,7 @@ Problem buildApplication(const toml::table& root, TomlReader& reader) {
   in.root = &root;
   const toml::node& name = reader.require(root, "name");
   in.name = reader.stringOf(name, "name");
+  if (!isProblemName(in.name)) reader.fail(name, "name '" + in.name + "' must match [a-z0-9._-]+");
   reader.setProblem(in.name);
   const toml::node& app = reader.require(root, "application");
   in.application = reader.stringOf(app, "application");
