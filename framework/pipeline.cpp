@@ -156,6 +156,8 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   summary.tConnection = secondsSince(t);
   summary.ambiguousCells = connected.ambiguousCells;
   summary.singularCells = connected.singularCells;
+  summary.offManifoldVertices = connected.offManifoldVertices;
+  summary.perturbation = connected.perturbation;
 
   // Analysis on the welded mesh.
   t = Clock::now();

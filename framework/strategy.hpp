@@ -16,6 +16,7 @@
 #include "complex.hpp"
 #include "grid.hpp"
 #include "problem.hpp"
+#include "summary.hpp"
 #include "system.hpp"
 
 namespace ndc {
@@ -75,6 +76,10 @@ struct ConnectionOutput {
   Complex<S> complex;
   std::int64_t ambiguousCells = 0;  ///< cells whose piece of M is not one simple piece
   std::int64_t singularCells = 0;   ///< cells with a rank-deficient Jacobian near M
+  /// Dual vertices whose Newton projection onto M did not converge.
+  std::int64_t offManifoldVertices = 0;
+  /// The level perturbation the connection used (crossing), else empty.
+  PerturbationRecord perturbation;
 };
 
 /// Connection: builds the k-simplices. Models: PaperConnection, NaiveConnection

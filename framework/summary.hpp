@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace ndc {
 
@@ -32,6 +33,33 @@ struct MeshStats {
   std::int64_t chordFailures = 0;
 };
 
+/// A point of M where the Jacobian of the constraints loses rank (`diagnostics.singular_points`).
+struct SingularPoint {
+  std::vector<double> point;  ///< n coordinates
+  double sigmaMin = 0;        ///< smallest singular value of the m x n Jacobian there
+};
+
+/// One key of the problem's `[expect]` compared with the mesh (`expect` in summary.json).
+struct ExpectCheck {
+  std::string key;  ///< e.g. "components", "euler_characteristic", "boundary_edges"
+  long wanted = 0;
+  long got = 0;
+  bool ok = false;
+};
+
+/// How the crossing connection put M in general position with respect to the grid
+/// (`diagnostics.perturbation` in summary.json; see docs/crossing.md).
+struct PerturbationRecord {
+  /// The level c of the perturbed system F = c whose crossings decide the dual cells (one
+  /// value per equation); empty when the connection does not perturb (k = n - 1, or another
+  /// connection).
+  std::vector<double> level;
+  int attempts = 0;  ///< levels tried until no crossing was within rounding of a grid face
+  /// Crossings still within rounding of the boundary of their face after the last attempt
+  /// (0 when general position was verified).
+  std::int64_t degenerateCrossings = 0;
+};
+
 /// Everything summary.json holds.
 struct Summary {
   std::string problem;
@@ -40,6 +68,13 @@ struct Summary {
   std::int64_t visited = 0, solution = 0, normal = 0, abnormal = 0, failed = 0;
   MeshStats mesh;
   std::int64_t ambiguousCells = 0, singularCells = 0;
+  /// Dual vertices that Newton could not bring onto M (written at their crossing mean).
+  std::int64_t offManifoldVertices = 0;
+  PerturbationRecord perturbation;
+  /// Located singular points of M (`diagnostics.singular_points`, `singular.csv`).
+  std::vector<SingularPoint> singularPoints;
+  /// The comparison with `[expect]`; empty when the problem has none.
+  std::vector<ExpectCheck> expect;
   /// Application problems only (empty name otherwise): the application, and how many mesh
   /// vertices have an image denominator too close to 0 (e.g. the bisector determinant).
   std::string application;
