@@ -12,6 +12,7 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -29,6 +30,7 @@
 #include <thread>
 
 #include "cli/solve_options.hpp"
+#include "expectation.hpp"
 #include "generate.hpp"
 #include "io.hpp"
 #include "toml_reader.hpp"
@@ -1104,15 +1106,68 @@ class ProgressReport {
   Clock::time_point start_, lastDraw_{};
 };
 
+/// The `expect_ok` and `expect_notes` columns of a run: the problem's `[expect]` compared with
+/// the mesh of its summary by checkExpectation, as `solve` does (recomputed here, so summaries
+/// of earlier invocations get them too). `expect_ok` is `true` or `false` (a compared key
+/// differs; empty when no key could be compared), `expect_notes` lists the keys that differ or
+/// could not be compared; both are empty when the problem has no `[expect]` or the run has no
+/// summary.
+std::pair<std::string, std::string> expectationColumns(const ExperimentProblem& p,
+                                                       const Outcome& o) {
+  const Expectation& x = p.expect;
+  if (o.status != "ok" || (!x.components && !x.eulerCharacteristic && x.other.empty())) return {};
+  const std::map<std::string, std::string> values(o.values.begin(), o.values.end());
+  MeshStats m;
+  const std::pair<const char*, std::int64_t*> fields[] = {
+      {"mesh.vertices", &m.vertices},
+      {"mesh.edges", &m.edges},
+      {"mesh.triangles", &m.triangles},
+      {"mesh.components", &m.components},
+      {"mesh.boundary_edges", &m.boundaryEdges},
+      {"mesh.nonmanifold_edges", &m.nonmanifoldEdges},
+      {"mesh.euler_characteristic", &m.eulerCharacteristic},
+      {"mesh.open_ends", &m.openEnds},
+      {"mesh.branch_vertices", &m.branchVertices}};
+  for (const auto& [name, field] : fields) {
+    const auto it = values.find(name);
+    if (it == values.end() || it->second.empty()) return {};
+    try {
+      *field = std::stoll(it->second);
+    } catch (const std::exception&) {
+      return {};
+    }
+  }
+  const std::vector<ExpectCheck> checks = checkExpectation(x, m, p.k);
+  std::string notes;
+  bool compared = false;
+  for (const ExpectCheck& check : checks) {
+    compared = compared || check.notComparable.empty();
+    if (!check.ok) notes += (notes.empty() ? "" : "; ") + describeCheck(check);
+  }
+  if (!compared) return {"", notes};
+  return {expectationMismatch(checks) ? "false" : "true", notes};
+}
+
 void writeCsv(const fs::path& file, const ExperimentConfig& c,
               const std::vector<ExperimentRun>& runs, const std::vector<Outcome>& outcomes) {
   // Columns: the run's identity, then the known summary numbers, then any others (sorted).
   std::vector<std::string> columns(kExperimentSummaryColumns.begin(),
                                    kExperimentSummaryColumns.end());
+  // A list element has a number in its path (`diagnostics.singular_points.0.sigma_min`): lists
+  // vary in length from run to run and stay in the run's files.
+  const auto listElement = [](const std::string& name) {
+    std::istringstream parts(name);
+    for (std::string part; std::getline(parts, part, '.');)
+      if (!part.empty() && std::all_of(part.begin(), part.end(),
+                                       [](unsigned char ch) { return std::isdigit(ch) != 0; }))
+        return true;
+    return false;
+  };
   std::set<std::string> extra;
   for (const Outcome& o : outcomes)
     for (const auto& [name, value] : o.values)
       if (name != "n" && name != "k" && name.rfind("settings.", 0) != 0 &&
+          name.rfind("expect.", 0) != 0 && !listElement(name) &&
           std::find(columns.begin(), columns.end(), name) == columns.end())
         extra.insert(name);
   columns.insert(columns.end(), extra.begin(), extra.end());
@@ -1128,6 +1183,7 @@ void writeCsv(const fs::path& file, const ExperimentConfig& c,
     const ExperimentProblem& p = c.problems[run.problem];
     const Settings& s = run.settings;
     const Outcome& o = outcomes[r];
+    const auto [expectOk, expectNotes] = expectationColumns(p, o);
     const std::vector<std::string> fields = {c.id,
                                              run.id,
                                              p.name,
@@ -1147,7 +1203,9 @@ void writeCsv(const fs::path& file, const ExperimentConfig& c,
                                              optional(o.exitCode),
                                              o.error,
                                              optional(p.expect.components),
-                                             optional(p.expect.eulerCharacteristic)};
+                                             optional(p.expect.eulerCharacteristic),
+                                             expectOk,
+                                             expectNotes};
     for (std::size_t i = 0; i < fields.size(); ++i) csv << (i ? "," : "") << csvField(fields[i]);
     const std::map<std::string, std::string> values(o.values.begin(), o.values.end());
     for (const std::string& name : columns) {

@@ -69,7 +69,9 @@ struct ExperimentRun {
 std::vector<ExperimentRun> experimentGrid(const ExperimentConfig& config);
 
 /// The leading columns of the combined CSV `<id>.csv`, one row per run.
-inline constexpr std::array<std::string_view, 20> kExperimentRunColumns = {
+/// `expect_ok` and `expect_notes` record the comparison of the run's mesh with the problem's
+/// `[expect]` (checkExpectation, expectation.hpp).
+inline constexpr std::array<std::string_view, 22> kExperimentRunColumns = {
     "experiment",
     "run",
     "problem",
@@ -89,11 +91,15 @@ inline constexpr std::array<std::string_view, 20> kExperimentRunColumns = {
     "exit_code",
     "error",
     "expect_components",
-    "expect_euler_characteristic"};
+    "expect_euler_characteristic",
+    "expect_ok",
+    "expect_notes"};
 
-/// The numeric summary.json fields (design.md 4.3) that follow, flattened with dotted names.
-/// Numeric fields a later summary schema adds come after these, sorted by name.
-inline constexpr std::array<std::string_view, 24> kExperimentSummaryColumns = {
+/// The numeric summary.json fields (design.md 4.3, and the counts of 4.5) that follow, flattened
+/// with dotted names. Numeric fields a later summary schema adds come after these, sorted by
+/// name; list elements (singular points, the perturbation level) and `expect` (see
+/// `expect_ok`) are left out.
+inline constexpr std::array<std::string_view, 27> kExperimentSummaryColumns = {
     "cells.visited",
     "cells.solution",
     "cells.normal",
@@ -117,7 +123,10 @@ inline constexpr std::array<std::string_view, 24> kExperimentSummaryColumns = {
     "timing_s.projection",
     "timing_s.connection",
     "timing_s.analysis",
-    "timing_s.total"};
+    "timing_s.total",
+    "diagnostics.off_manifold_vertices",
+    "diagnostics.perturbation.attempts",
+    "diagnostics.perturbation.degenerate_crossings"};
 
 /// The numeric fields of a JSON document (numbers and null), in document order, named by
 /// their dotted paths (`cells.visited`); the number text is kept as written, null is "".

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "problem.hpp"
 
@@ -19,6 +21,12 @@ std::string number(double v) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.17g", v);
   return buffer;
+}
+
+std::string numberList(const std::vector<double>& values) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + number(values[i]);
+  return out + "]";
 }
 
 }  // namespace
@@ -84,11 +92,37 @@ std::string toJson(const Summary& s) {
     << ", \"max_chord_error\": " << number(m.maxChordError) << "},\n";
   o << "  \"diagnostics\": {\"ambiguous_cells\": " << s.ambiguousCells
     << ", \"singular_cells\": " << s.singularCells << ", \"chord_failures\": " << m.chordFailures
-    << "},\n";
+    << ", \"off_manifold_vertices\": " << s.offManifoldVertices;
+  // Extensions (design.md 4.5): located singular points and the crossing's perturbation.
+  o << ",\n    \"singular_points\": [";
+  for (std::size_t i = 0; i < s.singularPoints.size(); ++i) {
+    const SingularPoint& p = s.singularPoints[i];
+    o << (i ? ",\n      " : "\n      ") << "{\"point\": " << numberList(p.point)
+      << ", \"sigma_min\": " << number(p.sigmaMin) << "}";
+  }
+  o << (s.singularPoints.empty() ? "]" : "\n    ]");
+  const PerturbationRecord& q = s.perturbation;
+  o << ",\n    \"perturbation\": {\"level\": " << numberList(q.level)
+    << ", \"attempts\": " << q.attempts << ", \"degenerate_crossings\": " << q.degenerateCrossings
+    << "}},\n";
   o << "  \"timing_s\": {\"subdivision\": " << number(s.tSubdivision)
     << ", \"projection\": " << number(s.tProjection)
     << ", \"connection\": " << number(s.tConnection) << ", \"analysis\": " << number(s.tAnalysis)
     << ", \"total\": " << number(s.tTotal) << "}";
+  // Extension (design.md 4.5): the problem's [expect] compared with the mesh, when it has one.
+  if (!s.expect.empty()) {
+    o << ",\n  \"expect\": {";
+    for (std::size_t i = 0; i < s.expect.size(); ++i) {
+      const ExpectCheck& c = s.expect[i];
+      o << (i ? ", " : "") << jsonQuoted(c.key) << ": {\"wanted\": " << c.wanted;
+      if (c.notComparable.empty())
+        o << ", \"got\": " << c.got << ", \"ok\": " << (c.ok ? "true" : "false") << "}";
+      else
+        o << ", \"got\": null, \"ok\": null, \"not_comparable\": " << jsonQuoted(c.notComparable)
+          << "}";
+    }
+    o << "}";
+  }
   // Extension (application problems): which application, and where its image map is singular.
   if (!s.application.empty())
     o << ",\n  \"application\": {\"name\": " << jsonQuoted(s.application)
@@ -165,6 +199,19 @@ void writeCellsCsv(std::ostream& out, const RunResult& r) {
   }
 }
 
+void writeSingularCsv(std::ostream& out, const RunResult& r) {
+  out << "point,sigma_min";
+  for (int j = 0; j < r.n; ++j) out << ",u" << j;
+  out << '\n';
+  for (std::size_t i = 0; i < r.summary.singularPoints.size(); ++i) {
+    const SingularPoint& p = r.summary.singularPoints[i];
+    out << i << ',' << number(p.sigmaMin);
+    for (int j = 0; j < r.n; ++j)
+      out << ',' << (static_cast<std::size_t>(j) < p.point.size() ? number(p.point[j]) : "");
+    out << '\n';
+  }
+}
+
 void writeInputPly(std::ostream& out, const TriangleSoup& input) {
   out << "ply\nformat ascii 1.0\ncomment ndcontour input surfaces\nelement vertex "
       << input.vertices.size() << "\nproperty double x\nproperty double y\nproperty double z\n"
@@ -200,29 +247,49 @@ void writeRuledPly(std::ostream& out, const RunResult& r) {
   }
 }
 
-void writeOutputs(const std::filesystem::path& dir, const RunResult& result) {
+std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const RunResult& result) {
   std::error_code error;
   std::filesystem::create_directories(dir, error);
   if (error || !std::filesystem::is_directory(dir)) {
     throw InputError(dir.string() + ": cannot create the output directory");
   }
-  std::ostringstream ply, csv;
-  writePly(ply, result);
-  writeCellsCsv(csv, result);
-  writeAtomically(dir / "mesh.ply", ply.str());
-  writeAtomically(dir / "cells.csv", csv.str());
+  // Every file is formatted before the first one is written.
+  std::vector<std::pair<std::string, std::string>> files;
+  const auto add = [&](const char* name, auto write) {
+    std::ostringstream text;
+    write(text);
+    files.emplace_back(name, text.str());
+  };
+  add("mesh.ply", [&](std::ostream& o) { writePly(o, result); });
+  add("cells.csv", [&](std::ostream& o) { writeCellsCsv(o, result); });
+  add("singular.csv", [&](std::ostream& o) { writeSingularCsv(o, result); });
   if (const ApplicationData* app = result.application.get()) {
-    std::ostringstream input;
-    writeInputPly(input, app->input);
-    writeAtomically(dir / "input.ply", input.str());
-    if (app->secondImage && result.k == 1) {
-      std::ostringstream ruled;
-      writeRuledPly(ruled, result);
-      writeAtomically(dir / "ruled.ply", ruled.str());
-    }
+    add("input.ply", [&](std::ostream& o) { writeInputPly(o, app->input); });
+    if (app->secondImage && result.k == 1)
+      add("ruled.ply", [&](std::ostream& o) { writeRuledPly(o, result); });
   }
+  add("summary.json", [&](std::ostream& o) { o << toJson(result.summary); });
+
+  // The folder holds one whole run: a previous run's summary goes first (while the files are
+  // replaced the folder reads as unfinished), and so do its outputs that this run does not
+  // write (input.ply of an application problem).
+  const auto written = [&](const std::string& name) {
+    for (const auto& f : files)
+      if (f.first == name) return true;
+    return false;
+  };
+  for (const char* name : {"summary.json", "input.ply", "ruled.ply"})
+    if (std::string(name) == "summary.json" || !written(name)) {
+      std::filesystem::remove(dir / name, error);
+      if (error) throw InputError((dir / name).string() + ": cannot remove the previous output");
+    }
   // summary.json last: its presence marks a finished run.
-  writeAtomically(dir / "summary.json", toJson(result.summary));
+  std::vector<std::string> names;
+  for (const auto& [name, text] : files) {
+    writeAtomically(dir / name, text);
+    names.push_back(name);
+  }
+  return names;
 }
 
 }  // namespace ndc

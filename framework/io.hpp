@@ -1,10 +1,12 @@
 /// \file io.hpp
-/// Output files of a run (design.md 4.3, 4.4): summary.json, mesh.ply and cells.csv.
+/// Output files of a run (design.md 4.3-4.5): summary.json, mesh.ply, cells.csv and
+/// singular.csv.
 #pragma once
 
 #include <filesystem>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "pipeline.hpp"
 
@@ -18,6 +20,11 @@ void writePly(std::ostream& out, const RunResult& result);
 /// Writes cells.csv: cell number, multi-index, centre, class, projected point.
 void writeCellsCsv(std::ostream& out, const RunResult& result);
 
+/// Writes singular.csv: the header `point,sigma_min,u0,..,u{n-1}`, then one row per located
+/// singular point of M (its number, the smallest singular value of the Jacobian there, and its
+/// n coordinates). Only the header when there is none.
+void writeSingularCsv(std::ostream& out, const RunResult& result);
+
 /// `s` as a JSON string literal (quotes, backslashes and control characters escaped).
 std::string jsonQuoted(const std::string& s);
 
@@ -26,10 +33,12 @@ std::string jsonQuoted(const std::string& s);
 /// ndc::InputError when the file cannot be written.
 void writeAtomically(const std::filesystem::path& target, const std::string& text);
 
-/// Writes summary.json, mesh.ply and cells.csv into `dir` (created if needed). Each file is
-/// written to a temporary name and renamed into place only when complete, so an existing
-/// output is never replaced by a partial one. Throws ndc::InputError if `dir` cannot be
-/// written.
-void writeOutputs(const std::filesystem::path& dir, const RunResult& result);
+/// Writes mesh.ply, cells.csv, singular.csv (input.ply and ruled.ply for applications that
+/// have them) and last summary.json into `dir` (created if needed); returns the file names
+/// written, in that order. Each file is written to a temporary name and renamed into place
+/// only when complete, so an existing output is never replaced by a partial one, and
+/// summary.json, whose presence marks a finished run, comes last. Throws ndc::InputError if
+/// `dir` cannot be written.
+std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const RunResult& result);
 
 }  // namespace ndc

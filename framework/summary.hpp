@@ -45,6 +45,9 @@ struct ExpectCheck {
   long wanted = 0;
   long got = 0;
   bool ok = false;
+  /// Why the key could not be compared (not a mesh statistic, or genus of a mesh that is not
+  /// one closed surface); empty when it was. A key not compared has `ok` false and no `got`.
+  std::string notComparable;
 };
 
 /// How the crossing connection put M in general position with respect to the grid

@@ -141,12 +141,15 @@ void checkBadConfig(const Run& run, std::initializer_list<std::string> parts) {
 const std::string kHeader =
     "experiment,run,problem,problem_file,n,k,depth,seed,scalar,precision_bits,bounding,"
     "subdivision,projection,classification,connection,status,exit_code,error,expect_components,"
-    "expect_euler_characteristic,cells.visited,cells.solution,cells.normal,cells.abnormal,"
+    "expect_euler_characteristic,expect_ok,expect_notes,cells.visited,cells.solution,"
+    "cells.normal,cells.abnormal,"
     "cells.failed,mesh.vertices,mesh.edges,mesh.triangles,mesh.components,mesh.boundary_edges,"
     "mesh.nonmanifold_edges,mesh.euler_characteristic,mesh.open_ends,mesh.branch_vertices,"
     "accuracy.max_residual,accuracy.max_chord_error,diagnostics.ambiguous_cells,"
     "diagnostics.singular_cells,diagnostics.chord_failures,timing_s.subdivision,"
-    "timing_s.projection,timing_s.connection,timing_s.analysis,timing_s.total";
+    "timing_s.projection,timing_s.connection,timing_s.analysis,timing_s.total,"
+    "diagnostics.off_manifold_vertices,diagnostics.perturbation.attempts,"
+    "diagnostics.perturbation.degenerate_crossings";
 
 const std::string kTiny =
     "id = \"tiny\"\nartefact = \"table\"\ndescription = \"a tiny grid\"\n"
@@ -289,11 +292,16 @@ TEST_CASE("experiment: a tiny grid writes the combined CSV, one row per run in g
     CHECK(r.at("expect_components") == "1");
     CHECK(r.at("mesh.components") == "1");
     CHECK(r.at("mesh.euler_characteristic") == "0");
+    // The comparison with [expect] (components = 1, euler_characteristic = 0).
+    CHECK(r.at("expect_ok") == "true");
+    CHECK(r.at("expect_notes").empty());
+    CHECK(r.at("diagnostics.off_manifold_vertices") == "0");
     CHECK(std::stoi(r.at("cells.solution")) > 0);
     CHECK(std::stod(r.at("timing_s.total")) >= 0);
     // Each run directory holds the solve outputs, its stderr and its command.
     const fs::path runDir = out / "tiny" / "runs" / r.at("run");
-    for (const char* file : {"summary.json", "mesh.ply", "cells.csv", "stderr.txt", "command.txt"})
+    for (const char* file :
+         {"summary.json", "mesh.ply", "cells.csv", "singular.csv", "stderr.txt", "command.txt"})
       CHECK(fs::exists(runDir / file));
     CHECK(contains(slurp(runDir / "command.txt"), "ndcontour solve "));
   }
@@ -316,6 +324,51 @@ TEST_CASE("experiment: a tiny grid writes the combined CSV, one row per run in g
   REQUIRE(quickRecords.size() == 2);
   for (const auto& r : quickRecords) CHECK(r.at("depth") == "2");
   CHECK(contains(slurp(out / "tiny" / "provenance.json"), "\"quick\": true"));
+}
+
+TEST_CASE("experiment: the comparison with [expect] is recorded per run", "[experiment]") {
+  // The circle with a wrong and a right [expect], and one without: the runs succeed (the runner
+  // does not pass --check) and the CSV says which matched.
+  const fs::path problems = scratch() / "expect-problems";
+  fs::create_directories(problems);
+  const std::string circle =
+      "variables = [\"x\", \"y\"]\ndomain = [[-2, 2], [-2, 2]]\n"
+      "equations = [\"x^2 + y^2 - 1\"]\n";
+  std::ofstream(problems / "a.toml")
+      << "name = \"wrong\"\n" + circle + "[expect]\ncomponents = 2\ngenus = 0\n";
+  std::ofstream(problems / "b.toml")
+      << "name = \"right\"\n" + circle + "[expect]\ncomponents = 1\n";
+  std::ofstream(problems / "c.toml") << "name = \"none\"\n" + circle;
+  const fs::path config = writeConfig("expect-grid",
+                                      "id = \"expect-grid\"\nartefact = \"table\"\n"
+                                      "description = \"d\"\nproblems = [\"" +
+                                          (problems / "*.toml").string() + "\"]\ndepths = [3]\n");
+  const fs::path out = scratch() / "expect-out";
+  fs::remove_all(out);
+  const Run run = experiment(config, out);
+  INFO("stdout: " << run.out << "stderr: " << run.err);
+  REQUIRE(run.status == 0);
+  const auto records = csvRecords(out / "expect-grid" / "expect-grid.csv");
+  REQUIRE(records.size() == 3);
+  CHECK(records[0].at("problem") == "wrong");
+  CHECK(records[0].at("status") == "ok");
+  CHECK(records[0].at("expect_components") == "2");
+  CHECK(records[0].at("expect_ok") == "false");
+  CHECK(contains(records[0].at("expect_notes"),
+                 "expect components = 2, got 1; expect genus = 0: "
+                 "not comparable"));
+  CHECK(records[1].at("expect_ok") == "true");
+  CHECK(records[1].at("expect_notes").empty());
+  CHECK(records[2].at("expect_ok").empty());
+  CHECK(records[2].at("expect_components").empty());
+  // The run's own warning is in its stderr.txt.
+  CHECK(contains(slurp(out / "expect-grid" / "runs" / records[0].at("run") / "stderr.txt"),
+                 "expect components = 2, got 1"));
+  // No column per key of [expect] or per list element.
+  for (const auto& [column, value] : records[0]) {
+    CHECK(column.rfind("expect.", 0) != 0);
+    CHECK(!contains(column, "singular_points"));
+  }
 }
 
 TEST_CASE("experiment: re-running skips finished runs and repeats unfinished ones",
