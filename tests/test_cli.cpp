@@ -268,3 +268,110 @@ TEST_CASE("cli: an equation too large for memory is bad input, not a crash", "[c
                 {"big.toml:4:", "equation 1", "Bernstein coefficients", "at most"});
   checkBadInput(ndcontour("info " + big), {"Bernstein coefficients"});
 }
+
+TEST_CASE("cli: solve compares the mesh with [expect]; --check exits 3 on a mismatch", "[cli]") {
+  // The circle has one component: [expect] components = 2 is wrong.
+  const fs::path wrong = writeProblem("wrong-expect.toml", kValid + "[expect]\ncomponents = 2\n");
+  const std::string args = "solve " + quoted(wrong.string()) + " --depth 4";
+  const std::string warning = wrong.string() + ": expect components = 2, got 1\n";
+
+  // Without --check: the warning, one line on standard error, and status 0.
+  const Run plain = ndcontour(args);
+  INFO("stdout: " << plain.out << "stderr: " << plain.err);
+  CHECK(plain.status == 0);
+  CHECK(plain.err == warning);
+  CHECK(contains(plain.out, "expect: components = 2 got 1\n"));
+
+  // --check: the same warning and status 3, also with --json (the summary still on stdout).
+  const Run checked = ndcontour(args + " --check");
+  CHECK(checked.status == 3);
+  CHECK(checked.err == warning);
+  const fs::path out = scratch() / "wrong-expect-out";
+  fs::remove_all(out);
+  const Run json = ndcontour(args + " --check --json --out " + quoted(out.string()));
+  CHECK(json.status == 3);
+  CHECK(json.err == warning);
+  CHECK(json.out.rfind("{", 0) == 0);
+  const std::string field =
+      "\"expect\": {\"components\": {\"wanted\": 2, \"got\": 1, \"ok\": false}}";
+  CHECK(contains(json.out, field));
+  CHECK(contains(slurp(out / "summary.json"), field));
+
+  // A right [expect]: ok true, nothing on standard error, status 0 with --check.
+  const fs::path right = writeProblem(
+      "right-expect.toml", kValid + "[expect]\ncomponents = 1\neuler_characteristic = 0\n");
+  const Run good = ndcontour("solve " + quoted(right.string()) + " --depth 4 --check --json");
+  INFO("stderr: " << good.err);
+  CHECK(good.status == 0);
+  CHECK(good.err.empty());
+  CHECK(contains(good.out,
+                 "\"expect\": {\"components\": {\"wanted\": 1, \"got\": 1, \"ok\": true}, "
+                 "\"euler_characteristic\": {\"wanted\": 0, \"got\": 0, \"ok\": true}}"));
+
+  // A key that cannot be compared is reported (a warning and in the summary), not a mismatch.
+  const fs::path other = writeProblem("other-expect.toml",
+                                      kValid + "[expect]\ncomponents = 1\ngenus = 0\nloops = 1\n");
+  const Run notes = ndcontour("solve " + quoted(other.string()) + " --depth 4 --check --json");
+  INFO("stderr: " << notes.err);
+  CHECK(notes.status == 0);
+  CHECK(std::count(notes.err.begin(), notes.err.end(), '\n') == 2);
+  CHECK(contains(notes.err, other.string() + ": expect genus = 0: not comparable (genus needs a "
+                                             "surface (k = 2), the problem has k = 1)\n"));
+  CHECK(contains(notes.err, other.string() + ": expect loops = 1: not comparable"));
+  CHECK(contains(notes.out,
+                 "\"genus\": {\"wanted\": 0, \"got\": null, \"ok\": null, "
+                 "\"not_comparable\": \"genus needs a surface"));
+
+  // Without [expect] the summary has no `expect`.
+  const std::string valid = quoted(writeProblem("valid.toml", kValid).string());
+  const Run none = ndcontour("solve " + valid + " --depth 4 --json");
+  CHECK(none.status == 0);
+  CHECK(!contains(none.out, "\"expect\""));
+
+  // Help lists --check and the exit statuses.
+  const Run help = ndcontour("solve --help");
+  CHECK(contains(help.out, "--check"));
+  CHECK(contains(help.out, "3 solve --check"));
+  CHECK(contains(ndcontour("--help").out, "Exit status: 0 success"));
+
+  // Bad input still exits 2 with one line, --check or not.
+  checkBadInput(
+      ndcontour(
+          "solve " +
+          quoted(
+              writeProblem("bad-expect.toml", kValid + "[expect]\ncomponents = 1.5\n").string()) +
+          " --check"),
+      {"bad-expect.toml:6:", "expect.components must be an integer"});
+}
+
+TEST_CASE("cli: solve writes singular.csv and the diagnostics of design.md 4.5", "[cli]") {
+  const std::string valid = quoted(writeProblem("valid.toml", kValid).string());
+  const fs::path out = scratch() / "diagnostics-out";
+  fs::remove_all(out);
+  // A stale output of an earlier (application) run in the folder goes.
+  fs::create_directories(out);
+  std::ofstream(out / "input.ply") << "stale";
+  std::ofstream(out / "summary.json") << "stale";
+  const Run run = ndcontour("solve " + valid + " --depth 4 --out " + quoted(out.string()));
+  INFO("stdout: " << run.out << "stderr: " << run.err);
+  CHECK(run.status == 0);
+  CHECK(run.err.empty());
+  for (const char* name : {"summary.json", "mesh.ply", "cells.csv", "singular.csv"})
+    CHECK(fs::exists(out / name));
+  CHECK(!fs::exists(out / "input.ply"));
+  // The circle has no singular point: singular.csv is its header.
+  CHECK(slurp(out / "singular.csv") == "point,sigma_min,u0,u1\n");
+  const std::string summary = slurp(out / "summary.json");
+  for (const char* field :
+       {"\"singular_points\": []", "\"off_manifold_vertices\": 0",
+        "\"perturbation\": {\"level\": [", "\"attempts\": ", "\"degenerate_crossings\": 0"})
+    CHECK(contains(summary, field));
+  // The human summary: singular points, and every file written.
+  CHECK(contains(run.out, "singular points: 0\n"));
+  const std::string dir = out.string();
+  CHECK(contains(run.out, "wrote " + dir + "/mesh.ply, " + dir + "/cells.csv, " + dir +
+                              "/singular.csv, " + dir + "/summary.json\n"));
+  // No stray temporary files.
+  for (const auto& entry : fs::directory_iterator(out))
+    CHECK(entry.path().filename().string().rfind(".", 0) != 0);
+}

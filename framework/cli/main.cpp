@@ -1,5 +1,6 @@
 // The `ndcontour` command-line tool (design.md 4.2). Every error ends the program with one
-// line on standard error: status 2 for bad input or usage, 1 for an internal error.
+// line on standard error: status 2 for bad input or usage, 1 for an internal error; `solve
+// --check` exits 3 when the mesh differs from the problem's [expect] (solve_options.hpp).
 #include <CLI/CLI.hpp>
 
 #include <iostream>
@@ -14,9 +15,8 @@
 
 namespace {
 
-/// Exit statuses of the tool.
-constexpr int kExitInternal = 1;
-constexpr int kExitBadInput = 2;
+using ndc::cli::kExitBadInput;
+using ndc::cli::kExitInternal;
 
 std::string oneLine(std::string text) {
   for (char& c : text)
@@ -28,6 +28,7 @@ int run(int argc, char** argv) {
   CLI::App app{"ndcontour: contouring 1- and 2-manifolds in arbitrary dimensions", "ndcontour"};
   app.set_version_flag("--version", std::string("ndcontour ") + NDC_VERSION);
   app.require_subcommand(1);
+  app.footer(ndc::cli::kExitStatusHelp);
 
   std::string infoPath;
   CLI::App* info = app.add_subcommand("info", "Describe a problem file");

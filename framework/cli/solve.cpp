@@ -1,12 +1,18 @@
-// `ndcontour solve`: runs the pipeline and writes the outputs of design.md 4.2-4.4.
+// `ndcontour solve`: runs the pipeline, compares the mesh with [expect] and writes the outputs
+// of design.md 4.2-4.5.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "cli/commands.hpp"
+#include "expectation.hpp"
 #include "io.hpp"
 #include "pipeline.hpp"
 
@@ -40,16 +46,94 @@ Progress terminalProgress() {
   };
 }
 
+/// Numbers as `(a, b, c)` (or between other brackets) in the stream's default precision.
+std::string listText(const std::vector<double>& values, char open = '(', char close = ')') {
+  std::ostringstream text;
+  text << open;
+  for (std::size_t j = 0; j < values.size(); ++j) text << (j ? ", " : "") << values[j];
+  text << close;
+  return text.str();
+}
+
+/// Warnings on standard error, one line each naming the problem file: differences from
+/// `[expect]` (and keys that could not be compared), dual vertices off M, and crossings left
+/// within rounding of a grid face.
+void warn(const Problem& problem, const Summary& s, bool check) {
+  const std::string& file = problem.path;
+  for (const ExpectCheck& c : s.expect)
+    if (!c.ok) std::cerr << file << ": " << describeCheck(c) << '\n';
+  const Expectation& x = problem.expect;
+  if (check && !x.components && !x.eulerCharacteristic && x.other.empty())
+    std::cerr << file << ": --check: the problem has no [expect] to check\n";
+  if (s.offManifoldVertices > 0)
+    std::cerr << file << ": " << s.offManifoldVertices
+              << " dual vertices could not be projected onto M\n";
+  if (s.perturbation.degenerateCrossings > 0)
+    std::cerr << file << ": " << s.perturbation.degenerateCrossings
+              << " crossings are within rounding of a grid face after " << s.perturbation.attempts
+              << " attempts: general position is not verified\n";
+}
+
+/// The human summary's lines for `[expect]`, singular points, off-manifold vertices and the
+/// perturbation.
+void printDiagnostics(const Summary& s) {
+  if (!s.expect.empty()) {
+    std::cout << "expect:";
+    for (std::size_t i = 0; i < s.expect.size(); ++i) {
+      const ExpectCheck& c = s.expect[i];
+      std::cout << (i ? ", " : " ") << c.key << " = " << c.wanted;
+      if (!c.notComparable.empty())
+        std::cout << " not comparable";
+      else if (c.ok)
+        std::cout << " ok";
+      else
+        std::cout << " got " << c.got;
+    }
+    std::cout << '\n';
+  }
+  // Singular points: the count and the first few.
+  constexpr std::size_t kShown = 3;
+  std::cout << "singular points: " << s.singularPoints.size();
+  for (std::size_t i = 0; i < std::min(kShown, s.singularPoints.size()); ++i)
+    std::cout << (i ? "; " : ": ") << listText(s.singularPoints[i].point) << " sigma_min "
+              << s.singularPoints[i].sigmaMin;
+  if (s.singularPoints.size() > kShown)
+    std::cout << "; ... (" << s.singularPoints.size() - kShown << " more)";
+  std::cout << '\n';
+  if (s.offManifoldVertices > 0)
+    std::cout << "off-manifold vertices: " << s.offManifoldVertices
+              << " (dual vertices Newton could not project onto M)\n";
+  const PerturbationRecord& q = s.perturbation;
+  if (!q.level.empty() || q.attempts > 0) {
+    std::cout << "general position: ";
+    if (q.level.empty())
+      std::cout << "no level offset";
+    else
+      std::cout << "level offset c = " << listText(q.level, '[', ']');
+    std::cout << " (" << q.attempts << (q.attempts == 1 ? " attempt" : " attempts");
+    if (q.degenerateCrossings > 0)
+      std::cout << "; " << q.degenerateCrossings
+                << " crossings within rounding of a grid face: not verified";
+    std::cout << ")\n";
+  }
+}
+
 }  // namespace
 
 int runSolve(SolveOptions options, const Problem& problem) {
   if (options.tolerance) options.settings.depth = depthForTolerance(problem, *options.tolerance);
   if (options.outDir) checkWritable(*options.outDir);
-  const RunResult result = runPipeline(problem, options.settings, terminalProgress());
-  if (options.outDir) writeOutputs(*options.outDir, result);
+  RunResult result = runPipeline(problem, options.settings, terminalProgress());
+  // design.md 4.5: the mesh against the problem's [expect] (none: no `expect` in the summary).
+  result.summary.expect = checkExpectation(problem.expect, result.summary.mesh, result.k);
+  const int status =
+      options.check && expectationMismatch(result.summary.expect) ? kExitExpectMismatch : kExitOk;
+  std::vector<std::string> written;
+  if (options.outDir) written = writeOutputs(*options.outDir, result);
+  warn(problem, result.summary, options.check);
   if (options.json) {
     std::cout << toJson(result.summary);
-    return 0;
+    return status;
   }
   const Summary& s = result.summary;
   const MeshStats& m = s.mesh;
@@ -66,8 +150,15 @@ int runSolve(SolveOptions options, const Problem& problem) {
             << "accuracy: max residual " << m.maxResidual << ", max chord error " << m.maxChordError
             << "\n"
             << "time: " << s.tTotal << " s\n";
-  if (options.outDir) std::cout << "wrote " << options.outDir->c_str() << "/summary.json\n";
-  return 0;
+  printDiagnostics(s);
+  if (options.outDir) {
+    std::cout << "wrote";
+    for (std::size_t i = 0; i < written.size(); ++i)
+      std::cout << (i ? ", " : " ")
+                << (std::filesystem::path(*options.outDir) / written[i]).string();
+    std::cout << '\n';
+  }
+  return status;
 }
 
 }  // namespace ndc::cli

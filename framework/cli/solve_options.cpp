@@ -85,9 +85,16 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
   solve.add_option("--jitter", s.jitter, "Seed of a grid jitter (default: no jitter)")
       ->check(unsignedUpTo(std::numeric_limits<std::uint64_t>::max()))
       ->type_name("SEED");
-  solve.add_option("--out", o.outDir, "Write summary.json, mesh.ply and cells.csv to DIR")
+  solve
+      .add_option("--out", o.outDir,
+                  "Write summary.json, mesh.ply, cells.csv and singular.csv to DIR")
       ->type_name("DIR");
   solve.add_flag("--json", o.json, "Print the summary (JSON) on standard output, nothing else");
+  solve.add_flag("--check", o.check,
+                 "Exit with status " + std::to_string(kExitExpectMismatch) +
+                     " when the mesh differs from the problem's [expect] (each difference is a "
+                     "warning on standard error either way)");
+  solve.footer(kExitStatusHelp);
 }
 
 void validateSolveOptions(SolveOptions& o) {

@@ -47,9 +47,23 @@ struct SolveOptions {
   Settings settings;
   std::optional<unsigned> precision;  ///< `--precision BITS` as given (before defaulting)
   std::optional<double> tolerance;    ///< `--tolerance h`: unset lets the pipeline choose
-  std::optional<std::string> outDir;  ///< `--out DIR`: write summary.json, mesh.ply, cells.csv
-  bool json = false;                  ///< `--json`: the summary on standard output, nothing else
+  /// `--out DIR`: write summary.json, mesh.ply, cells.csv, singular.csv
+  std::optional<std::string> outDir;
+  bool json = false;  ///< `--json`: the summary on standard output, nothing else
+  /// `--check`: exit with kExitExpectMismatch when the mesh differs from the problem's `[expect]`.
+  bool check = false;
 };
+
+/// Exit statuses of the tool: success (also a mismatch with `[expect]` without `--check`), an
+/// internal error, bad input or usage (one line on standard error), and `solve --check` finding
+/// the mesh different from the problem's `[expect]`.
+inline constexpr int kExitOk = 0, kExitInternal = 1, kExitBadInput = 2, kExitExpectMismatch = 3;
+
+/// The exit statuses as the help text lists them.
+inline constexpr const char* kExitStatusHelp =
+    "Exit status: 0 success (a mismatch with [expect] is only a warning without --check), 1 "
+    "internal error, 2 bad input or usage (one line on standard error naming the file), 3 "
+    "solve --check: the mesh differs from the problem's [expect].";
 
 /// Declares the options of the `solve` subcommand on `solve`, writing into `options`.
 void addSolveOptions(CLI::App& solve, SolveOptions& options);
