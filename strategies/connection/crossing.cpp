@@ -8,6 +8,7 @@
 #include <cmath>
 #include <map>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "bernstein.hpp"
@@ -24,25 +25,36 @@ using Vector = Eigen::Matrix<S, Eigen::Dynamic, 1>;
 /// Outcome of the Krawczyk test on a face box.
 enum class Krawczyk { kUnique, kNone, kUnknown };
 
-/// Finds the crossings of M with one m-face: the roots of the m constraints restricted to the
-/// face, a square system in the face's m free variables.
+/// Which ends of a face's free axes lie on the domain boundary. There the face has no
+/// neighbour to share a crossing with, so it is closed, and it keeps crossings up to `slack`
+/// outside (the perturbed level set F = c leaves the domain by that much where M touches it).
+struct FaceEnds {
+  std::vector<bool> lower, upper;
+};
+
+/// Finds the crossings of the level set F = c with one m-face: the roots of the m constraints
+/// minus the level c (docs/crossing.md, "General position"), restricted to the face, a square
+/// system in the face's m free variables. For m = 1 the level is 0 and the sign rule decides.
 template <class S>
 class FaceSolver {
  public:
-  FaceSolver(const System<S>& system, int maxDepth)
-      : system_(system), n_(system.n()), m_(system.m()), maxDepth_(maxDepth) {
+  FaceSolver(const System<S>& system, int maxDepth, std::vector<S> level, S slack)
+      : system_(system),
+        n_(system.n()),
+        m_(system.m()),
+        maxDepth_(maxDepth),
+        level_(std::move(level)),
+        slack_(std::move(slack)) {
     f_.resize(m_);
     jacobian_.resize(std::size_t(m_) * n_);
   }
 
   /// Solves on the face whose fixed coordinates are given in `point` (free ones are
-  /// overwritten); `patches` are the face slices (m variables, domain = the face box);
-  /// `closedUpper[j]` closes the face at the upper end of free axis j (the domain's end).
-  /// Appends the roots (full n-dim points) to `roots`; returns false if some root could not
-  /// be proven unique.
-  bool solve(std::vector<S> point, std::vector<int> freeAxes,
-             const std::vector<Bernstein<S>>& patches, std::vector<bool> closedUpper,
-             std::vector<std::vector<S>>& roots) {
+  /// overwritten); `patches` are the face slices of F (m variables, domain = the face box),
+  /// shifted here by the level; `ends` marks the free axes' domain ends. Appends the roots
+  /// (full n-dim points) to `roots`; returns false if some root could not be proven unique.
+  bool solve(std::vector<S> point, std::vector<int> freeAxes, std::vector<Bernstein<S>>& patches,
+             FaceEnds ends, std::vector<std::vector<S>>& roots) {
     point_ = std::move(point);
     free_ = std::move(freeAxes);
     certain_ = true;
@@ -50,21 +62,24 @@ class FaceSolver {
       edge(patches.front().domain(), roots);
       return true;
     }
-    recurse(patches, closedUpper, 0, roots);
+    for (int i = 0; i < m_; ++i) {
+      for (S& c : patches[i].coefficients()) c -= level_[i];
+    }
+    recurse(patches, ends, 0, roots);
     return certain_;
   }
 
  private:
-  void recurse(const std::vector<Bernstein<S>>& patches, const std::vector<bool>& closedUpper,
-               int depth, std::vector<std::vector<S>>& roots) {
+  void recurse(const std::vector<Bernstein<S>>& patches, const FaceEnds& ends, int depth,
+               std::vector<std::vector<S>>& roots) {
     //! [crossing-face]
     // Exclusion: a coefficient hull of one sign on the face means no root.
+    const Box<S>& box = patches.front().domain();
     for (const auto& p : patches) {
       if (p.excludesZero()) return;
     }
-    const Box<S>& box = patches.front().domain();
     std::vector<S> root;
-    const bool found = newton(box, root) && inside(box, closedUpper, root);
+    const bool found = newton(box, root) && inside(box, ends, root);
     const Krawczyk k = krawczyk(patches);
     if (k == Krawczyk::kNone) return;
     if (found && (k == Krawczyk::kUnique || krawczykAround(root, box) == Krawczyk::kUnique)) {
@@ -87,10 +102,11 @@ class FaceSolver {
     const int axis = depth % m_;
     std::vector<Bernstein<S>> lower(patches.size()), upper(patches.size());
     for (std::size_t i = 0; i < patches.size(); ++i) patches[i].halve(axis, lower[i], upper[i]);
-    std::vector<bool> closedLower = closedUpper;
-    closedLower[axis] = false;
-    recurse(lower, closedLower, depth + 1, roots);
-    recurse(upper, closedUpper, depth + 1, roots);
+    FaceEnds lowerEnds = ends, upperEnds = ends;
+    lowerEnds.upper[axis] = false;
+    upperEnds.lower[axis] = false;
+    recurse(lower, lowerEnds, depth + 1, roots);
+    recurse(upper, upperEnds, depth + 1, roots);
     //! [crossing-face]
   }
 
@@ -145,18 +161,21 @@ class FaceSolver {
     return true;
   }
 
-  bool inside(const Box<S>& box, const std::vector<bool>& closedUpper,
-              const std::vector<S>& y) const {
+  /// Half-open `[lo, hi)` inside the grid, closed and widened by the slack at domain ends.
+  bool inside(const Box<S>& box, const FaceEnds& ends, const std::vector<S>& y) const {
     for (int j = 0; j < m_; ++j) {
-      if (y[j] < box.lo[j]) return false;
-      if (closedUpper[j] ? y[j] > box.hi[j] : y[j] >= box.hi[j]) return false;
+      if (ends.lower[j] ? y[j] < box.lo[j] - slack_ : y[j] < box.lo[j]) return false;
+      if (ends.upper[j] ? y[j] > box.hi[j] + slack_ : y[j] >= box.hi[j]) return false;
     }
     return true;
   }
 
-  /// Square Newton on the face from its centre; true if it converged.
+  /// Square Newton on the face from its centre, damped (the step is halved until the residual
+  /// drops, and the iterate stays within two face widths), so that it also converges near a
+  /// fold of M where the face Jacobian is nearly singular; true if it converged.
   bool newton(const Box<S>& box, std::vector<S>& y) {
     using std::abs;
+    using std::sqrt;
     y.resize(m_);
     S width = 0;
     for (int j = 0; j < m_; ++j) {
@@ -166,31 +185,77 @@ class FaceSolver {
     const S eps = ScalarTraits<S>::epsilon();
     Matrix<S> jf(m_, m_);
     Vector<S> rhs(m_);
-    std::vector<S> x = point_;
-    for (int iteration = 0; iteration < 40; ++iteration) {
-      for (int j = 0; j < m_; ++j) x[free_[j]] = y[j];
+    std::vector<S> x = point_, trial(m_);
+    // max_i |F_i - c_i| at the free coordinates `at`; the Jacobian columns into jf.
+    const auto residual = [&](const std::vector<S>& at) {
+      for (int j = 0; j < m_; ++j) x[free_[j]] = at[j];
       system_.evaluate(x, f_, jacobian_);
-      bool zero = true;
+      S r = 0;
       for (int i = 0; i < m_; ++i) {
-        rhs(i) = f_[i];
-        zero = zero && f_[i] == 0;
+        rhs(i) = f_[i] - level_[i];
+        r = std::max<S>(r, abs(rhs(i)));
+      }
+      return r;
+    };
+    S r = residual(y);
+    for (int iteration = 0; iteration < 60; ++iteration) {
+      if (r == 0) return true;
+      for (int i = 0; i < m_; ++i) {
         for (int j = 0; j < m_; ++j) jf(i, j) = jacobian_[std::size_t(i) * n_ + free_[j]];
       }
-      if (zero) return true;
       Eigen::FullPivLU<Matrix<S>> lu(jf);
       if (lu.rank() < m_) return false;
       const Vector<S> step = lu.solve(rhs);
       S size = 0, scale = 1;
       for (int j = 0; j < m_; ++j) {
-        y[j] -= step(j);
         size = std::max<S>(size, abs(step(j)));
         scale = std::max<S>(scale, abs(y[j]));
-        // A root far outside the face is not this face's root.
-        if (y[j] < box.lo[j] - 2 * width || y[j] > box.hi[j] + 2 * width) return false;
       }
       if (size <= 64 * eps * scale) return true;
+      // Where the face Jacobian is nearly singular the steps stall above 64 eps: stop when the
+      // residual is at rounding level.
+      if (size <= 1e-6 * width && residualWithinRounding(y)) return true;
+      // Damping: halve the step until it stays near the face and lowers the residual.
+      S lambda = 1;
+      bool accepted = false;
+      for (int halving = 0; halving < 30 && !accepted; ++halving, lambda /= 2) {
+        bool near = true;
+        for (int j = 0; j < m_; ++j) {
+          trial[j] = y[j] - lambda * step(j);
+          near = near && trial[j] >= box.lo[j] - 2 * width && trial[j] <= box.hi[j] + 2 * width;
+        }
+        if (!near) continue;
+        const S rt = residual(trial);
+        // Near the root the residual is at rounding level: accept the full step there.
+        if (rt < r || (halving == 0 && size <= 1e-6 * width)) {
+          y = trial;
+          r = rt;
+          accepted = true;
+        }
+      }
+      // No step lowers the residual: converged iff it is at rounding level (the interval value
+      // of F - c at y contains 0), as happens where the face Jacobian is nearly singular.
+      if (!accepted) return residualWithinRounding(y);
+      if (lambda * 2 * size <= 64 * eps * scale) return true;
     }
     return false;
+  }
+
+  /// Whether F - c at the free coordinates y encloses 0 in outward-rounded interval arithmetic.
+  bool residualWithinRounding(const std::vector<S>& y) const {
+    using I = Interval<S>;
+    std::vector<I> xi;
+    xi.reserve(n_);
+    for (int j = 0; j < n_; ++j) xi.emplace_back(point_[j]);
+    for (int j = 0; j < m_; ++j) xi[free_[j]] = I(y[j]);
+    for (int i = 0; i < m_; ++i) {
+      const I f =
+          system_.equations()[i].template evaluate<S>(std::span<const I>(xi)) - I(level_[i]);
+      // Twice the enclosure's width: the evaluation order of F differs from the tape's.
+      const S slack = f.upper() - f.lower();
+      if (f.lower() - slack > 0 || f.upper() + slack < 0) return false;
+    }
+    return true;
   }
 
   /// Krawczyk operator on the face box X with y = mid X, Y = J(y)^-1:
@@ -256,7 +321,8 @@ class FaceSolver {
     for (int j = 0; j < n_; ++j) xi.emplace_back(x[j]);
     std::vector<I> fy;
     for (int i = 0; i < m_; ++i) {
-      fy.push_back(system_.equations()[i].template evaluate<S>(std::span<const I>(xi)));
+      fy.push_back(system_.equations()[i].template evaluate<S>(std::span<const I>(xi)) -
+                   I(level_[i]));
     }
     bool unique = true;
     for (int i = 0; i < m_; ++i) {
@@ -275,6 +341,8 @@ class FaceSolver {
 
   const System<S>& system_;
   int n_, m_, maxDepth_;
+  std::vector<S> level_;  ///< c: the crossings are those of F = c
+  S slack_;               ///< how far outside the domain a crossing is still kept
   std::vector<S> point_;
   std::vector<int> free_;
   std::vector<S> f_, jacobian_;
@@ -301,10 +369,122 @@ Vector<S> singularValuesAt(const System<S>& system, std::span<const S> x) {
   return Eigen::JacobiSVD<Matrix<S>>(jacobianAt(system, x)).singularValues();
 }
 
+/// The local degree of F on a face from its roots: the sum of the signs of the face Jacobian's
+/// determinant (columns of the free axes). A piece of M that dips through the face and back
+/// gives two roots of opposite sign that cancel; two strands crossing the face the same way (a
+/// self-intersection) add up and keep the curve connected. The count is odd exactly when the
+/// number of roots is odd, so closedness mod 2 is kept. Near a singular point, where the
+/// orientation of M is undefined and two strands may cross one face with opposite signs, every
+/// root counts, rather than cut M.
+template <class S>
+int faceDegree(const System<S>& system, const std::vector<std::vector<S>>& roots,
+               const std::vector<int>& freeAxes) {
+  const int m = system.m();
+  int degree = 0;
+  bool singular = false;
+  for (const auto& r : roots) {
+    const Matrix<S> full = jacobianAt<S>(system, r);
+    Matrix<S> j(m, m);
+    for (int col = 0; col < m; ++col) j.col(col) = full.col(freeAxes[col]);
+    const S det = Eigen::FullPivLU<Matrix<S>>(j).determinant();
+    degree += det > 0 ? 1 : (det < 0 ? -1 : 0);
+    const Vector<S> sigma = Eigen::JacobiSVD<Matrix<S>>(full).singularValues();
+    singular = singular || sigma(m - 1) < sigma(0) / 10;
+  }
+  const int count = static_cast<int>(roots.size());
+  if (count % 2 == 1 && degree == 0) degree = 1;  // a root of unknown orientation
+  if (count >= 2 && std::abs(degree) < count && singular) degree = count;
+  return degree;
+}
+
+/// Hash of a multi-index (a face key: its lowest vertex and its fixed axes).
+struct IndexHash {
+  std::size_t operator()(const std::vector<std::int32_t>& v) const {
+    std::uint64_t h = 1469598103934665603ull;
+    for (std::int32_t x : v) h = (h ^ static_cast<std::uint32_t>(x)) * 1099511628211ull;
+    return static_cast<std::size_t>(h);
+  }
+};
+
 /// A dual k-cell: the 2^k cells around a crossed m-face, in cyclic order (k = 2).
 struct DualCell {
   std::array<std::int32_t, 4> cells{-1, -1, -1, -1};
   std::int32_t root = -1;  ///< first root of its face, in the root list
+};
+
+/// The level c of the perturbed system F = c whose crossings with the grid faces decide the
+/// dual cells (docs/crossing.md, "General position"). M itself may pass through vertices,
+/// edges and faces of the grid; by Sard's theorem almost every nearby level set meets every
+/// face of the grid transversally and misses its lower-dimensional faces. c_i is a fixed
+/// irrational fraction of `kRelative` times the cell width times the gradient scale of F_i,
+/// so F = c lies about 1e-8 cell widths from M: far above rounding, far below any feature
+/// the grid resolves. The grid, the domain and the B-spline knot planes stay where they are.
+template <class S>
+struct GeneralPosition {
+  static constexpr int kAttempts = 4;
+  static constexpr double kRelative = 1.0 / (1 << 26);
+
+  GeneralPosition(const ConnectionInput<S>& in, const Grid& grid) {
+    using std::abs;
+    using std::sqrt;
+    const int n = grid.n, m = in.system.m();
+    S width = S(grid.cellWidth(0));
+    for (int j = 1; j < n; ++j) width = std::min<S>(width, S(grid.cellWidth(j)));
+    // Gradient scale of each F_i: the largest gradient norm at (a sample of) the projected
+    // cell points.
+    scale.assign(m, S(0));
+    const std::size_t count = in.cells.size(), stride = std::max<std::size_t>(1, count / 256);
+    std::vector<S> f(m), jacobian(std::size_t(m) * n);
+    for (std::size_t c = 0; c < count; c += stride) {
+      in.system.evaluate(in.projections.at(c), f, jacobian);
+      for (int i = 0; i < m; ++i) {
+        S norm = 0;
+        for (int j = 0; j < n; ++j)
+          norm += jacobian[std::size_t(i) * n + j] * jacobian[std::size_t(i) * n + j];
+        scale[i] = std::max<S>(scale[i], sqrt(norm));
+      }
+    }
+    for (S& g : scale) {
+      if (!(g > 0)) g = 1;
+      g *= width * S(kRelative);
+    }
+    slack = 64 * width * S(kRelative);
+    tolerance = width * S(kRelative) / 64;
+  }
+
+  /// The level of attempt a: c_i = theta_{a,i} * scale_i with theta in [0.5, 1) from the
+  /// golden-ratio sequence (no two attempts or equations share a ratio).
+  std::vector<S> level(int attempt) const {
+    std::vector<S> c(scale.size());
+    for (std::size_t i = 0; i < scale.size(); ++i) {
+      const double t = std::fmod(0.6180339887498949 * double(attempt * 7 + i + 1), 1.0);
+      c[i] = S(0.5 + 0.5 * t) * scale[i];
+    }
+    return c;
+  }
+
+  /// How many of a face's roots lie within the tolerance of one of its grid (not domain)
+  /// boundaries: there the face and its neighbour could disagree about the root.
+  std::int64_t nearBoundary(const std::vector<std::vector<S>>& roots, const Box<S>& box,
+                            const std::vector<int>& freeAxes, const FaceEnds& ends) const {
+    using std::abs;
+    std::int64_t near = 0;
+    for (const auto& r : roots) {
+      for (std::size_t t = 0; t < freeAxes.size(); ++t) {
+        const int j = freeAxes[t];
+        if ((!ends.lower[t] && abs(r[j] - box.lo[j]) < tolerance) ||
+            (!ends.upper[t] && abs(box.hi[j] - r[j]) < tolerance)) {
+          ++near;
+          break;
+        }
+      }
+    }
+    return near;
+  }
+
+  std::vector<S> scale;  ///< kRelative * cell width * gradient scale, per equation
+  S slack;               ///< crossings kept this far outside the domain
+  S tolerance;           ///< a root this close to a face boundary is degenerate
 };
 
 /// Union-find over small integer sets (the link of one vertex).
@@ -362,122 +542,125 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
     return patchForms.emplace(key, std::move(forms)).first->second;
   };
 
-  const std::size_t count = cells.size();
-  std::vector<std::uint8_t> uncertain(count, 0);
+  std::vector<std::uint8_t> uncertain;
   std::vector<DualCell> duals;
   std::vector<S> rootPoints;  // n per recorded dual cell: the crossing it stands for
-  FaceSolver<S> solver(in.system, maxFaceDepth);
+  // The cells the dual complex is built on: the solution cells, and the cells that the level
+  // set F = c enters where M only touches them (added when a crossed face needs them).
+  SolutionCells set;
   std::vector<Bernstein<S>> cellPatches(m), facePatches(m);
   std::vector<std::vector<S>> roots;
   std::vector<std::int32_t> index(n);
   const std::int64_t top = grid.cellsPerAxis();
+  const GeneralPosition<S> position(in, grid);
+  // The k-subsets of the axes: the fixed axes of the m-faces.
+  std::vector<std::array<int, 2>> fixedAxes;
+  for (int a = 0; a < n; ++a) {
+    if (k == 1) fixedAxes.push_back({a, -1});
+    for (int b = a + 1; k == 2 && b < n; ++b) fixedAxes.push_back({a, b});
+  }
 
-  // The m-faces at each cell's lower corner: every interior m-face exactly once.
-  for (std::size_t c = 0; c < count; ++c) {
-    const auto ci = cells.cell(c);
-    const Box<S> box = cellBox(grid, domain, ci);
-    bool restricted = false;
-    const auto neighbourAt = [&](std::initializer_list<int> axes) -> std::int32_t {
-      std::copy(ci.begin(), ci.end(), index.begin());
-      for (int a : axes) --index[a];
-      auto it = cells.lookup.find(grid.pack(index));
-      return it == cells.lookup.end() ? -1 : it->second;
-    };
-    std::vector<int> faceFree;  // the free axes of the face being solved
-    // Sign of the determinant of the face Jacobian (columns of the free axes) at a root.
-    const auto orientation = [&](const std::vector<S>& r) {
-      const Matrix<S> full = jacobianAt<S>(in.system, r);
-      Matrix<S> j(m, m);
-      for (int col = 0; col < m; ++col) j.col(col) = full.col(faceFree[col]);
-      const S det = Eigen::FullPivLU<Matrix<S>>(j).determinant();
-      return det > 0 ? 1 : (det < 0 ? -1 : 0);
-    };
-    // Whether the full Jacobian at a root is nearly rank-deficient (sigma_min < 0.1 sigma_max).
-    const auto nearSingular = [&](const std::vector<S>& r) {
-      const Vector<S> sigma = singularValuesAt<S>(in.system, r);
-      return sigma(m - 1) < sigma(0) / 10;
-    };
-    const auto solveFace = [&](std::initializer_list<int> fixed) {
-      if (!restricted) {
-        const std::vector<Bernstein<S>>& rootPatches = formsFor(ci);
-        for (int i = 0; i < m; ++i) cellPatches[i] = rootPatches[i].restrict(box);
-        restricted = true;
-      }
-      std::vector<int> freeAxes;
-      std::vector<bool> closedUpper;
-      for (int j = 0; j < n; ++j) {
-        if (std::find(fixed.begin(), fixed.end(), j) != fixed.end()) continue;
-        freeAxes.push_back(j);
-        closedUpper.push_back(ci[j] + 1 == top);
-      }
-      // Slice the highest fixed axis first so the lower axis numbers stay valid.
-      std::vector<int> order(fixed);
-      std::sort(order.rbegin(), order.rend());
-      for (int i = 0; i < m; ++i) {
-        facePatches[i] = cellPatches[i];
-        for (int a : order) facePatches[i] = facePatches[i].faceSlice(a, false);
-      }
-      faceFree = freeAxes;
-      std::vector<S> point(box.lo);
-      roots.clear();
-      return solver.solve(point, freeAxes, facePatches, closedUpper, roots);
-    };
-    const auto record = [&](const DualCell& dual) {
-      // The dual complex counts roots with orientation (the sign of the face Jacobian's
-      // determinant, i.e. the local degree): a piece of M that dips through the face and back
-      // gives two roots of opposite sign that cancel, while two strands crossing the face the
-      // same way (a self-intersection) add up and keep the curve connected. The count is
-      // odd exactly when the number of roots is odd, so closedness mod 2 is kept.
-      int degree = 0;
-      for (const auto& r : roots) degree += orientation(r);
-      if (roots.size() % 2 == 1 && degree == 0) degree = 1;  // a root of unknown orientation
-      // Near a singular point (self-intersection) the orientation of M is undefined and two
-      // strands may cross one face with opposite signs: keep them all rather than cut M.
-      if (roots.size() >= 2 && std::abs(degree) < static_cast<int>(roots.size()) &&
-          std::any_of(roots.begin(), roots.end(), nearSingular)) {
-        degree = static_cast<int>(roots.size());
-        for (int i = 0; i < (k == 1 ? 2 : 4); ++i) uncertain[dual.cells[i]] = 1;
-      }
-      for (int copy = 0; copy < std::abs(degree); ++copy) {
-        DualCell d = dual;
-        d.root = static_cast<std::int32_t>(rootPoints.size() / n);
-        rootPoints.insert(rootPoints.end(), roots.front().begin(), roots.front().end());
-        duals.push_back(d);
-      }
-    };
-    if (k == 1) {
-      for (int a = 0; a < n; ++a) {
-        if (ci[a] == 0) continue;  // on the domain boundary
-        const std::int32_t below = neighbourAt({a});
-        if (below < 0) continue;  // a crossing would make it a solution cell
-        DualCell dual;
-        dual.cells = {below, static_cast<std::int32_t>(c), -1, -1};
-        const bool certain = solveFace({a});
-        if (!certain) uncertain[c] = uncertain[below] = 1;
-        record(dual);
-      }
-    } else {
-      for (int a = 0; a < n; ++a) {
-        for (int b = a + 1; b < n; ++b) {
-          if (ci[a] == 0 || ci[b] == 0) continue;
-          const std::int32_t q0 = neighbourAt({a, b}), q1 = neighbourAt({b}), q3 = neighbourAt({a});
-          if (q0 < 0 || q1 < 0 || q3 < 0) continue;
-          // Cyclic order around the face: (-a,-b), (+a,-b), (+a,+b), (-a,+b).
-          DualCell dual;
-          dual.cells = {q0, q1, static_cast<std::int32_t>(c), q3};
-          const bool certain = solveFace({a, b});
-          if (!certain) {
-            for (auto q : dual.cells) uncertain[q] = 1;
+  // One pass over the faces for the level set F = c; returns the crossings that lie within
+  // rounding of their face's boundary (0: c puts M in general position for this grid).
+  const auto crossFaces = [&](const std::vector<S>& level) -> std::int64_t {
+    std::int64_t degenerate = 0;
+    set = cells;
+    uncertain.assign(set.size(), 0);
+    duals.clear();
+    rootPoints.clear();
+    FaceSolver<S> solver(in.system, maxFaceDepth, level, position.slack);
+    std::unordered_set<std::vector<std::int32_t>, IndexHash> solved;
+    std::vector<std::int32_t> faceKey(n + 1);
+    // Every m-face of every cell, once (the set grows while it is walked).
+    for (std::size_t c = 0; c < set.size(); ++c) {
+      const std::vector<std::int32_t> ci(set.cell(c).begin(), set.cell(c).end());
+      const Box<S> box = cellBox(grid, domain, ci);
+      bool restricted = false;
+      for (const auto& axes : fixedAxes) {
+        for (int side = 0; side < (1 << k); ++side) {
+          // The face's lowest vertex; faces on the domain boundary have no cells beyond.
+          std::copy(ci.begin(), ci.end(), faceKey.begin());
+          bool interior = true;
+          for (int t = 0; t < k; ++t) {
+            faceKey[axes[t]] += (side >> t) & 1;
+            interior = interior && faceKey[axes[t]] > 0 && faceKey[axes[t]] < top;
           }
-          record(dual);
+          faceKey[n] = axes[0] * n + (k == 2 ? axes[1] : 0);
+          if (!interior || !solved.insert(faceKey).second) continue;
+          if (!restricted) {
+            const std::vector<Bernstein<S>>& rootPatches = formsFor(ci);
+            for (int i = 0; i < m; ++i) cellPatches[i] = rootPatches[i].restrict(box);
+            restricted = true;
+          }
+          FaceEnds ends;
+          std::vector<int> freeAxes;
+          std::vector<S> point(box.lo);
+          for (int j = 0; j < n; ++j) {
+            if (j == axes[0] || j == axes[1]) continue;
+            freeAxes.push_back(j);
+            ends.lower.push_back(ci[j] == 0);
+            ends.upper.push_back(ci[j] + 1 == top);
+          }
+          // Slice the highest fixed axis first so the lower axis numbers stay valid.
+          for (int i = 0; i < m; ++i) {
+            facePatches[i] = cellPatches[i];
+            for (int t = k - 1; t >= 0; --t) {
+              const bool upper = (side >> t) & 1;
+              facePatches[i] = facePatches[i].faceSlice(axes[t], upper);
+              point[axes[t]] = upper ? box.hi[axes[t]] : box.lo[axes[t]];
+            }
+          }
+          roots.clear();
+          const bool certain = solver.solve(point, freeAxes, facePatches, ends, roots);
+          if (m > 1) degenerate += position.nearBoundary(roots, box, freeAxes, ends);
+          if (roots.empty()) continue;
+          const int degree = faceDegree(in.system, roots, freeAxes);
+          if (degree == 0) continue;
+          // The 2^k cells around the face, in cyclic order (k = 2): (-a,-b), (+a,-b),
+          // (+a,+b), (-a,+b); a cell M only touches is added.
+          DualCell dual;
+          for (int q = 0; q < (1 << k); ++q) {
+            const int bits = k == 1 ? q : (q == 0 ? 0 : q == 1 ? 1 : q == 2 ? 3 : 2);
+            std::copy(faceKey.begin(), faceKey.end() - 1, index.begin());
+            for (int t = 0; t < k; ++t) index[axes[t]] += ((bits >> t) & 1) - 1;
+            const auto [it, added] =
+                set.lookup.try_emplace(grid.pack(index), static_cast<std::int32_t>(set.size()));
+            if (added) {
+              set.index.insert(set.index.end(), index.begin(), index.end());
+              uncertain.push_back(0);
+            }
+            dual.cells[q] = it->second;
+          }
+          if (!certain || std::abs(degree) > 1) {
+            for (int q = 0; q < (1 << k); ++q) uncertain[dual.cells[q]] = 1;
+          }
+          for (int copy = 0; copy < std::abs(degree); ++copy) {
+            dual.root = static_cast<std::int32_t>(rootPoints.size() / n);
+            rootPoints.insert(rootPoints.end(), roots.front().begin(), roots.front().end());
+            duals.push_back(dual);
+          }
         }
       }
     }
-  }
+    return degenerate;
+  };
 
+  // General position: try levels until no crossing is within rounding of a face boundary.
   ConnectionOutput<S> out;
   out.complex.n = n;
   out.complex.k = k;
+  for (int attempt = 0;; ++attempt) {
+    const std::vector<S> level = position.level(attempt);
+    const std::int64_t degenerate = crossFaces(level);
+    out.perturbation.attempts = attempt + 1;
+    out.perturbation.degenerateCrossings = degenerate;
+    out.perturbation.level.clear();
+    if (m > 1) {
+      for (const S& c : level) out.perturbation.level.push_back(toDouble(c));
+    }
+    if (degenerate == 0 || m == 1 || attempt + 1 == GeneralPosition<S>::kAttempts) break;
+  }
+  const std::size_t count = set.size();
 
   // Pieces of M per cell: for k = 2 the link of a cell's vertex (one edge per incident quad,
   // between the quad's two cells that are face neighbours of the cell) splits into connected
@@ -492,7 +675,7 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
   std::vector<std::int32_t> piece(duals.size() * 4, 0);
   std::vector<std::int32_t> pieceCount(count, 0);
   const auto onDomainBoundary = [&](std::size_t c) {
-    const auto ci = cells.cell(c);
+    const auto ci = set.cell(c);
     return std::any_of(ci.begin(), ci.end(),
                        [&](std::int32_t i) { return i == 0 || i + 1 == top; });
   };
@@ -569,8 +752,13 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
     for (int p = 0; p < pieceCount[c]; ++p) {
       for (int j = 0; j < n; ++j) x[j] = sums[std::size_t(p) * n + j] / counts[p];
       const std::vector<S> mean = x;
-      if (!in.project(x).converged) x = mean;
-      const std::int32_t v = out.complex.addVertex(x, static_cast<std::int32_t>(c));
+      if (!in.project(x).converged) {
+        // Reported, never written silently off M (the analysis measures its residual too).
+        x = mean;
+        ++out.offManifoldVertices;
+      }
+      const std::int32_t v = out.complex.addVertex(
+          x, c < cells.size() ? static_cast<std::int32_t>(c) : std::int32_t{-1});
       if (p == 0) firstVertex[c] = v;
       // Singular cells: the Jacobian at the vertex is (nearly) rank-deficient relative to the
       // cell size, as at self-intersections and cone points.
