@@ -8,7 +8,6 @@
 #include <cmath>
 #include <map>
 #include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
 #include "bernstein.hpp"
@@ -397,15 +396,6 @@ int faceDegree(const System<S>& system, const std::vector<std::vector<S>>& roots
   return degree;
 }
 
-/// Hash of a multi-index (a face key: its lowest vertex and its fixed axes).
-struct IndexHash {
-  std::size_t operator()(const std::vector<std::int32_t>& v) const {
-    std::uint64_t h = 1469598103934665603ull;
-    for (std::int32_t x : v) h = (h ^ static_cast<std::uint32_t>(x)) * 1099511628211ull;
-    return static_cast<std::size_t>(h);
-  }
-};
-
 /// A dual k-cell: the 2^k cells around a crossed m-face, in cyclic order (k = 2).
 struct DualCell {
   std::array<std::int32_t, 4> cells{-1, -1, -1, -1};
@@ -569,8 +559,11 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
     duals.clear();
     rootPoints.clear();
     FaceSolver<S> solver(in.system, maxFaceDepth, level, position.slack);
-    std::unordered_set<std::vector<std::int32_t>, IndexHash> solved;
-    std::vector<std::int32_t> faceKey(n + 1);
+    std::vector<std::int32_t> corner(n);
+    std::array<CellKey, 4> around{};
+    std::array<std::int32_t, 4> aroundCell{};
+    FaceEnds ends;
+    std::vector<int> freeAxes;
     // Every m-face of every cell, once (the set grows while it is walked).
     for (std::size_t c = 0; c < set.size(); ++c) {
       const std::vector<std::int32_t> ci(set.cell(c).begin(), set.cell(c).end());
@@ -579,21 +572,35 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
       for (const auto& axes : fixedAxes) {
         for (int side = 0; side < (1 << k); ++side) {
           // The face's lowest vertex; faces on the domain boundary have no cells beyond.
-          std::copy(ci.begin(), ci.end(), faceKey.begin());
+          std::copy(ci.begin(), ci.end(), corner.begin());
           bool interior = true;
           for (int t = 0; t < k; ++t) {
-            faceKey[axes[t]] += (side >> t) & 1;
-            interior = interior && faceKey[axes[t]] > 0 && faceKey[axes[t]] < top;
+            corner[axes[t]] += (side >> t) & 1;
+            interior = interior && corner[axes[t]] > 0 && corner[axes[t]] < top;
           }
-          faceKey[n] = axes[0] * n + (k == 2 ? axes[1] : 0);
-          if (!interior || !solved.insert(faceKey).second) continue;
+          if (!interior) continue;
+          // The 2^k cells around the face, in cyclic order (k = 2): (-a,-b), (+a,-b), (+a,+b),
+          // (-a,+b). The face belongs to the first of them in the walk: skip it if another
+          // one came earlier (it was solved there).
+          bool owner = true;
+          for (int q = 0; q < (1 << k) && owner; ++q) {
+            const int bits = k == 1 ? q : (q == 0 ? 0 : q == 1 ? 1 : q == 2 ? 3 : 2);
+            std::copy(corner.begin(), corner.end(), index.begin());
+            for (int t = 0; t < k; ++t) index[axes[t]] += ((bits >> t) & 1) - 1;
+            around[q] = grid.pack(index);
+            const auto it = set.lookup.find(around[q]);
+            aroundCell[q] = it == set.lookup.end() ? -1 : it->second;
+            owner = aroundCell[q] < 0 || aroundCell[q] >= static_cast<std::int32_t>(c);
+          }
+          if (!owner) continue;
           if (!restricted) {
             const std::vector<Bernstein<S>>& rootPatches = formsFor(ci);
             for (int i = 0; i < m; ++i) cellPatches[i] = rootPatches[i].restrict(box);
             restricted = true;
           }
-          FaceEnds ends;
-          std::vector<int> freeAxes;
+          ends.lower.clear();
+          ends.upper.clear();
+          freeAxes.clear();
           std::vector<S> point(box.lo);
           for (int j = 0; j < n; ++j) {
             if (j == axes[0] || j == axes[1]) continue;
@@ -616,20 +623,17 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
           if (roots.empty()) continue;
           const int degree = faceDegree(in.system, roots, freeAxes);
           if (degree == 0) continue;
-          // The 2^k cells around the face, in cyclic order (k = 2): (-a,-b), (+a,-b),
-          // (+a,+b), (-a,+b); a cell M only touches is added.
+          // A cell around a crossed face that M only touches is added.
           DualCell dual;
           for (int q = 0; q < (1 << k); ++q) {
-            const int bits = k == 1 ? q : (q == 0 ? 0 : q == 1 ? 1 : q == 2 ? 3 : 2);
-            std::copy(faceKey.begin(), faceKey.end() - 1, index.begin());
-            for (int t = 0; t < k; ++t) index[axes[t]] += ((bits >> t) & 1) - 1;
-            const auto [it, added] =
-                set.lookup.try_emplace(grid.pack(index), static_cast<std::int32_t>(set.size()));
-            if (added) {
+            if (aroundCell[q] < 0) {
+              aroundCell[q] = static_cast<std::int32_t>(set.size());
+              set.lookup.emplace(around[q], aroundCell[q]);
+              grid.unpack(around[q], index);
               set.index.insert(set.index.end(), index.begin(), index.end());
               uncertain.push_back(0);
             }
-            dual.cells[q] = it->second;
+            dual.cells[q] = aroundCell[q];
           }
           if (!certain || std::abs(degree) > 1) {
             for (int q = 0; q < (1 << k); ++q) uncertain[dual.cells[q]] = 1;
