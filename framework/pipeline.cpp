@@ -11,6 +11,7 @@
 #include "application.hpp"
 #include "grid.hpp"
 #include "scalar.hpp"
+#include "singular.hpp"
 #include "strategies/bounding/bounding.hpp"
 #include "strategies/classification/classification.hpp"
 #include "strategies/connection/connection.hpp"
@@ -165,6 +166,9 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   for (int j = 0; j < problem.n(); ++j) diameter = std::max(diameter, grid.domain.width(j));
   const Complex<S> welded = weld<S>(connected.complex, 1e-9 * diameter);
   summary.mesh = analyse<S>(welded, system, project);
+  // Where the Jacobian loses rank on M: located and reported (framework/singular.hpp).
+  summary.singularPoints =
+      findSingularPoints<S>(problem, system, cells, projections, domain).points;
   summary.tAnalysis = secondsSince(t);
 
   // Outputs in double.
