@@ -164,11 +164,13 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   t = Clock::now();
   double diameter = 0;
   for (int j = 0; j < problem.n(); ++j) diameter = std::max(diameter, grid.domain.width(j));
-  const Complex<S> welded = weld<S>(connected.complex, 1e-9 * diameter);
-  summary.mesh = analyse<S>(welded, system, project);
-  // Where the Jacobian loses rank on M: located and reported (framework/singular.hpp).
+  // Where the Jacobian loses rank on M: located and reported (framework/singular.hpp), and
+  // the mesh joined there before welding.
   summary.singularPoints =
       findSingularPoints<S>(problem, system, cells, projections, domain).points;
+  joinAtSingularPoints<S>(connected.complex, summary.singularPoints, grid);
+  const Complex<S> welded = weld<S>(connected.complex, 1e-9 * diameter);
+  summary.mesh = analyse<S>(welded, system, project);
   summary.tAnalysis = secondsSince(t);
 
   // Outputs in double.

@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <span>
 #include <unordered_map>
@@ -527,5 +528,45 @@ template SingularSearch findSingularPoints(const Problem&, const System<double>&
 template SingularSearch findSingularPoints(const Problem&, const System<Mpfr>&,
                                            const SolutionCells&, const Projections<Mpfr>&,
                                            const Box<Mpfr>&, const SingularOptions&);
+
+template <class S>
+std::int64_t joinAtSingularPoints(Complex<S>& complex, const std::vector<SingularPoint>& points,
+                                  const Grid& grid) {
+  const int n = complex.n;
+  std::int64_t moved = 0;
+  std::vector<std::size_t> near;
+  for (const SingularPoint& p : points) {
+    // The vertices within one cell of the point, and the nearest of them.
+    near.clear();
+    std::size_t nearest = 0;
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t v = 0; v < complex.vertexCount(); ++v) {
+      const auto x = complex.vertex(v);
+      bool inside = true;
+      double d2 = 0;
+      for (int j = 0; j < n && inside; ++j) {
+        const double d = toDouble(x[j]) - p.point[j];
+        inside = std::abs(d) <= grid.cellWidth(j) * (1 + 1e-9);
+        d2 += d * d;
+      }
+      if (!inside) continue;
+      near.push_back(v);
+      if (d2 < best) best = d2, nearest = v;
+    }
+    if (near.size() < 2) continue;
+    const std::vector<S> target(complex.vertex(nearest).begin(), complex.vertex(nearest).end());
+    for (std::size_t v : near) {
+      if (v == nearest) continue;
+      std::copy(target.begin(), target.end(), complex.vertices.begin() + v * n);
+      ++moved;
+    }
+  }
+  return moved;
+}
+
+template std::int64_t joinAtSingularPoints(Complex<double>&, const std::vector<SingularPoint>&,
+                                           const Grid&);
+template std::int64_t joinAtSingularPoints(Complex<Mpfr>&, const std::vector<SingularPoint>&,
+                                           const Grid&);
 
 }  // namespace ndc

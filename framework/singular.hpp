@@ -128,4 +128,20 @@ extern template SingularSearch findSingularPoints(const Problem&, const System<M
                                                   const SolutionCells&, const Projections<Mpfr>&,
                                                   const Box<Mpfr>&, const SingularOptions&);
 
+/// Joins the mesh at located singular points: the dual vertices within one cell width (on every
+/// axis) of a point are given the coordinates of the one nearest to it, so that welding makes
+/// them one vertex. The crossing connection builds the mesh of a perturbed level set F = c
+/// (docs/crossing.md), which separates the branches of M at a singular point (Viviani's double
+/// point into two arcs, a double cone into two sheets); joined there, the mesh meets itself at
+/// the point as M does. The vertices keep their places on M (the nearest is one of them), so
+/// `max_residual` stays at working precision. Returns the number of vertices moved.
+template <class S>
+std::int64_t joinAtSingularPoints(Complex<S>& complex, const std::vector<SingularPoint>& points,
+                                  const Grid& grid);
+
+extern template std::int64_t joinAtSingularPoints(Complex<double>&,
+                                                  const std::vector<SingularPoint>&, const Grid&);
+extern template std::int64_t joinAtSingularPoints(Complex<Mpfr>&, const std::vector<SingularPoint>&,
+                                                  const Grid&);
+
 }  // namespace ndc

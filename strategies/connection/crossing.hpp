@@ -15,8 +15,10 @@ namespace ndc {
 /// manifold wherever every cell holds one simple piece of M. See \ref crossing.
 class CrossingConnection final {
  public:
-  /// Faces are subdivided at most this many rounds when their root is not proven unique.
-  int maxFaceDepth = 4;
+  /// Faces are halved at most this many times per free axis when a root is not proven unique.
+  /// The level perturbation (docs/crossing.md) splits a fold or a double point of M into two
+  /// crossings about sqrt(2^-26 h / h) = 2^-13 face widths apart: 16 halvings separate them.
+  int maxFaceDepth = 16;
 
   template <class S>
   ConnectionOutput<S> connect(const ConnectionInput<S>& in) const;
