@@ -90,6 +90,12 @@ class FaceSolver {
       // half-open face, it is on an upper boundary owned by the next face, or Newton strayed.
       std::vector<S> y;
       if (newton(box, y) && insideClosed(box, y)) return;  // owned by the neighbour face
+      // Newton failed, but K inside int X proves one root strictly inside this box (so inside
+      // the half-open face): keep it, at the box centre (a fold of F = c, where the face
+      // Jacobian is nearly singular, can stall Newton's convergence test).
+      for (int j = 0; j < m_; ++j) y[j] = (box.lo[j] + box.hi[j]) / 2;
+      roots.push_back(fullPoint(y));
+      return;
     }
     if (depth >= maxDepth_ * m_) {
       // Undecided at the smallest face size: keep Newton's root, flag the face uncertain.
