@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <string>
 #include <type_traits>
@@ -56,16 +57,7 @@ TEST_CASE("pipeline: every strategy combination runs on every example problem",
           CHECK(s.normal + s.abnormal + s.failed == s.solution);
           CHECK(s.visited >= s.solution);
           CHECK(s.solution > 0);
-          // Known failure, the same at a3e7a58 (before the level perturbation): with `interval`
-          // bounding at depth 3 every cell of sweep-silhouette-boomerang is a solution cell and
-          // `crossing` finds no crossing (0 vertices). Reported in the issue note; not hidden.
-          const bool known = problem.name == "sweep-silhouette-boomerang" &&
-                             bounding == "interval" && connection == "crossing";
-          if (known && s.mesh.vertices == 0) {
-            WARN("known failure: " << problem.name << " interval crossing has no vertices");
-          } else {
-            CHECK(s.mesh.vertices > 0);
-          }
+          CHECK(s.mesh.vertices > 0);
         }
       }
     }
@@ -103,20 +95,41 @@ TEST_CASE("pipeline: double and mpfr give the same cells and classes", "[pipelin
   ndc::test::PrecisionScope<ndc::Mpfr> scope(128);
   for (const char* name : {"circle", "circle-3d", "sphere", "torus", "clifford-torus"}) {
     const ndc::Problem problem = example(name);
-    // The cell classes are compared on a jittered grid: on its natural grid the Clifford torus
-    // meets cell faces, where a projected point is normal or abnormal by a rounding (the
-    // classification has no consistent tie-break yet; the crossing mesh does not depend on it).
+    // On the natural grid (the Clifford torus meets cell faces): a projected point within
+    // rounding of its cell's boundary is normal or abnormal by that rounding, so those cells
+    // (ties) are not compared; every other class must agree.
     ndc::Settings settings;
     settings.depth = 4;
-    settings.jitter = 1;
     settings.connection = "crossing";
     const ndc::RunResult d = ndc::runPipeline(problem, settings);
     settings.scalar = "mpfr";
     settings.precisionBits = 128;
     const ndc::RunResult m = ndc::runPipeline(problem, settings);
     INFO(name);
-    CHECK(d.cellIndex == m.cellIndex);
-    CHECK(d.cellClass == m.cellClass);
+    REQUIRE(d.cellIndex == m.cellIndex);
+    REQUIRE(d.cellClass.size() == m.cellClass.size());
+    const int n = problem.n();
+    std::size_t ties = 0, compared = 0;
+    for (std::size_t c = 0; c < d.cellClass.size(); ++c) {
+      // Distance of the double projection to the cell's boundary, in cell widths.
+      double margin = 1;
+      for (int j = 0; j < n; ++j) {
+        const double width = (problem.domain.hi[j] - problem.domain.lo[j]) / (1 << settings.depth);
+        const double offset = std::abs(d.cellPoint[c * n + j] - d.cellCentre[c * n + j]) / width;
+        margin = std::min(margin, std::abs(0.5 - offset));
+      }
+      if (margin < 1e-9) {
+        ++ties;
+        continue;
+      }
+      ++compared;
+      INFO("cell " << c << " margin " << margin);
+      CHECK(d.cellClass[c] == m.cellClass[c]);
+    }
+    // The Clifford torus passes through the grid vertices (+-0.5, +-0.5, ., .): 704 of its
+    // 2304 cells project exactly onto one.
+    INFO(ties << " ties, " << compared << " compared");
+    CHECK(compared >= ties);
     CHECK(d.summary.mesh.components == m.summary.mesh.components);
     CHECK(d.summary.mesh.eulerCharacteristic == m.summary.mesh.eulerCharacteristic);
   }

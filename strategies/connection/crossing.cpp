@@ -219,7 +219,7 @@ class FaceSolver {
       if (size <= 64 * eps * scale) return true;
       // Where the face Jacobian is nearly singular the steps stall above 64 eps: stop when the
       // residual is at rounding level.
-      if (size <= 1e-6 * width && residualWithinRounding(y)) return true;
+      if (size <= 1e-3 * width && residualWithinRounding(y)) return true;
       // Damping: halve the step until it stays near the face and lowers the residual.
       S lambda = 1;
       bool accepted = false;
@@ -246,13 +246,20 @@ class FaceSolver {
     return false;
   }
 
-  /// Whether F - c at the free coordinates y encloses 0 in outward-rounded interval arithmetic.
+  /// Whether F - c on the free coordinates y, widened by rounding, encloses 0 in outward-rounded
+  /// interval arithmetic.
   bool residualWithinRounding(const std::vector<S>& y) const {
     using I = Interval<S>;
     std::vector<I> xi;
     xi.reserve(n_);
     for (int j = 0; j < n_; ++j) xi.emplace_back(point_[j]);
-    for (int j = 0; j < m_; ++j) xi[free_[j]] = I(y[j]);
+    // The free coordinates widened by two units in the last place: the root itself need not
+    // be representable (F - c is then never exactly 0 at a floating-point y).
+    const S ulp = 2 * ScalarTraits<S>::epsilon();
+    for (int j = 0; j < m_; ++j) {
+      using std::abs;
+      xi[free_[j]] = I(y[j] - ulp * abs(y[j]), y[j] + ulp * abs(y[j]));
+    }
     for (int i = 0; i < m_; ++i) {
       const I f =
           system_.equations()[i].template evaluate<S>(std::span<const I>(xi)) - I(level_[i]);
@@ -426,19 +433,34 @@ struct GeneralPosition {
     const int n = grid.n, m = in.system.m();
     S width = S(grid.cellWidth(0));
     for (int j = 1; j < n; ++j) width = std::min<S>(width, S(grid.cellWidth(j)));
-    // Gradient scale of each F_i: the largest gradient norm at (a sample of) the projected
-    // cell points.
-    scale.assign(m, S(0));
-    const std::size_t count = in.cells.size(), stride = std::max<std::size_t>(1, count / 256);
+    // Gradient scale of each F_i: the median gradient norm at (a sample of) the projected cell
+    // points that Newton brought onto M. Points where it failed can lie far off M, with
+    // gradients orders of magnitude larger (interval bounding keeps many such cells).
+    const std::size_t count = in.cells.size();
+    std::vector<std::size_t> onM;
+    for (std::size_t c = 0; c < count; ++c) {
+      if (in.projections.converged[c]) onM.push_back(c);
+    }
+    if (onM.empty()) {
+      for (std::size_t c = 0; c < count; ++c) onM.push_back(c);
+    }
+    const std::size_t stride = std::max<std::size_t>(1, onM.size() / 256);
+    std::vector<std::vector<S>> norms(m);
     std::vector<S> f(m), jacobian(std::size_t(m) * n);
-    for (std::size_t c = 0; c < count; c += stride) {
-      in.system.evaluate(in.projections.at(c), f, jacobian);
+    for (std::size_t t = 0; t < onM.size(); t += stride) {
+      in.system.evaluate(in.projections.at(onM[t]), f, jacobian);
       for (int i = 0; i < m; ++i) {
         S norm = 0;
         for (int j = 0; j < n; ++j)
           norm += jacobian[std::size_t(i) * n + j] * jacobian[std::size_t(i) * n + j];
-        scale[i] = std::max<S>(scale[i], sqrt(norm));
+        norms[i].push_back(sqrt(norm));
       }
+    }
+    scale.assign(m, S(0));
+    for (int i = 0; i < m; ++i) {
+      auto middle = norms[i].begin() + norms[i].size() / 2;
+      std::nth_element(norms[i].begin(), middle, norms[i].end());
+      if (middle != norms[i].end()) scale[i] = *middle;
     }
     for (S& g : scale) {
       if (!(g > 0)) g = 1;

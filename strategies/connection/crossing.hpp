@@ -18,7 +18,10 @@ class CrossingConnection final {
   /// Faces are halved at most this many times per free axis when a root is not proven unique.
   /// The level perturbation (docs/crossing.md) splits a fold or a double point of M into two
   /// crossings about sqrt(2^-26 h / h) = 2^-13 face widths apart: 16 halvings separate them.
-  int maxFaceDepth = 16;
+  /// Where M is tangent to a face plane to higher order (the Krawczyk test then needs a box
+  /// smaller than the face determinant, about c^(3/4) for a quartic contact) 20 halvings prove
+  /// the root unique; the extra levels cost only on such faces.
+  int maxFaceDepth = 20;
 
   template <class S>
   ConnectionOutput<S> connect(const ConnectionInput<S>& in) const;
