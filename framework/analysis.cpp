@@ -215,9 +215,21 @@ MeshStats analyse(const Complex<S>& welded, const System<S>& system, const Proje
   } else if (k == 2) {
     // Triangle meshes: an edge of one triangle is boundary, of three or more non-manifold.
     stats.triangles = static_cast<std::int64_t>(simplexCount);
+    DisjointSets boundary(vertexCount);
+    std::vector<std::uint8_t> onBoundary(vertexCount, 0);
     for (const auto& [key, count] : edges) {
-      if (count == 1) ++stats.boundaryEdges;
+      if (count == 1) {
+        ++stats.boundaryEdges;
+        const auto a = static_cast<std::int32_t>(key >> 32);
+        const auto b = static_cast<std::int32_t>(key & 0xffffffffULL);
+        boundary.unite(a, b);
+        onBoundary[a] = onBoundary[b] = 1;
+      }
       if (count >= 3) ++stats.nonmanifoldEdges;
+    }
+    for (std::size_t v = 0; v < vertexCount; ++v) {
+      const auto i = static_cast<std::int32_t>(v);
+      if (onBoundary[v] && boundary.find(i) == i) ++stats.boundaryComponents;
     }
     stats.eulerCharacteristic = stats.vertices - stats.edges + stats.triangles;
   } else if (k >= 3) {

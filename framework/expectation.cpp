@@ -14,6 +14,7 @@ std::optional<std::int64_t> meshField(const std::string& key, const MeshStats& m
   if (key == "edges") return m.edges;
   if (key == "triangles") return m.triangles;
   if (key == "boundary_edges") return m.boundaryEdges;
+  if (key == "boundary_components") return m.boundaryComponents;
   if (key == "nonmanifold_edges") return m.nonmanifoldEdges;
   if (key == "open_ends") return m.openEnds;
   if (key == "branch_vertices") return m.branchVertices;

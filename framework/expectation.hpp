@@ -15,9 +15,10 @@ namespace ndc {
 
 /// The `[expect]` keys that are compared with the mesh: the integer `mesh` fields of
 /// summary.json (design.md 4.3) by the same names, and `genus`.
-inline constexpr std::array<std::string_view, 10> kExpectKeys = {
-    "components",     "euler_characteristic", "vertices",  "edges",           "triangles",
-    "boundary_edges", "nonmanifold_edges",    "open_ends", "branch_vertices", "genus"};
+inline constexpr std::array<std::string_view, 11> kExpectKeys = {
+    "components",     "euler_characteristic", "vertices",          "edges",     "triangles",
+    "boundary_edges", "boundary_components",  "nonmanifold_edges", "open_ends", "branch_vertices",
+    "genus"};
 
 /// Compares every key of `expect` with `mesh` (a run of a k-manifold), in the order
 /// components, euler_characteristic, then the other keys by name. Each key gives one

@@ -85,6 +85,7 @@ std::string toJson(const Summary& s) {
   o << "  \"mesh\": {\"vertices\": " << m.vertices << ", \"edges\": " << m.edges
     << ", \"triangles\": " << m.triangles << ", \"components\": " << m.components
     << ", \"boundary_edges\": " << m.boundaryEdges
+    << ", \"boundary_components\": " << m.boundaryComponents
     << ", \"nonmanifold_edges\": " << m.nonmanifoldEdges
     << ", \"euler_characteristic\": " << m.eulerCharacteristic << ", \"open_ends\": " << m.openEnds
     << ", \"branch_vertices\": " << m.branchVertices << "},\n";

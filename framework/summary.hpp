@@ -27,6 +27,9 @@ struct MeshStats {
   std::int64_t vertices = 0, edges = 0, triangles = 0, components = 0;
   std::int64_t boundaryEdges = 0, nonmanifoldEdges = 0, eulerCharacteristic = 0;
   std::int64_t openEnds = 0, branchVertices = 0;
+  /// k = 2: connected components of the boundary edges (each a closed loop on a manifold mesh
+  /// with boundary, e.g. 2 for a cylinder cut by the domain); 0 for other k.
+  std::int64_t boundaryComponents = 0;
   double maxResidual = 0;    ///< max over vertices and equations of |F_i(v)|
   double maxChordError = 0;  ///< max distance of segment midpoints / triangle centroids to M
   /// Midpoints / centroids whose projection did not converge (left out of maxChordError).

@@ -135,6 +135,7 @@ void checkClosed(const RunResult& r, long components, long euler) {
     CHECK(m.branchVertices == 0);
   } else {
     CHECK(m.boundaryEdges == 0);
+    CHECK(m.boundaryComponents == 0);
     CHECK(m.nonmanifoldEdges == 0);
   }
   CHECK(m.maxResidual <= residualBound<S>());
@@ -302,6 +303,7 @@ TEMPLATE_TEST_CASE("crossing: the cylinder has boundary only on the domain bound
       CHECK(m.nonmanifoldEdges == 0);
       CHECK(m.maxResidual <= residualBound<TestType>());
       REQUIRE(m.boundaryEdges > 0);
+      CHECK(m.boundaryComponents == 2);  // the circles z = -0.7 and z = 0.9
 
       const int n = r.n;
       std::vector<double> width(n);

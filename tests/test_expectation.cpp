@@ -39,29 +39,29 @@ TEST_CASE("expect: every key is compared or reported, in a fixed order", "[expec
   ndc::Expectation x;
   x.components = 1;
   x.eulerCharacteristic = -2;
-  x.other = {{"genus", 2}, {"boundary_edges", 0}, {"boundary_components", 0}, {"vertices", 99}};
+  x.other = {{"genus", 2}, {"boundary_edges", 0}, {"boundary_loops", 0}, {"vertices", 99}};
   const auto checks = ndc::checkExpectation(x, closedSurface(-2), 2);
   REQUIRE(checks.size() == 6);
   // components, euler_characteristic, then the others by name.
   CHECK(checks[0].key == "components");
   CHECK(checks[1].key == "euler_characteristic");
-  CHECK(checks[2].key == "boundary_components");
-  CHECK(checks[3].key == "boundary_edges");
+  CHECK(checks[2].key == "boundary_edges");
+  CHECK(checks[3].key == "boundary_loops");
   CHECK(checks[4].key == "genus");
   CHECK(checks[5].key == "vertices");
 
   CHECK((checks[0].ok && checks[0].got == 1 && checks[0].notComparable.empty()));
   CHECK((checks[1].ok && checks[1].got == -2));
-  CHECK((checks[3].ok && checks[3].got == 0));
+  CHECK((checks[2].ok && checks[2].got == 0));
   // genus = (2 - chi) / 2 on one closed surface.
   CHECK((checks[4].ok && checks[4].got == 2 && checks[4].notComparable.empty()));
   // A mesh statistic that differs.
   CHECK((!checks[5].ok && checks[5].got == 100 && checks[5].wanted == 99));
   CHECK(ndc::describeCheck(checks[5]) == "expect vertices = 99, got 100");
   // A key that is no mesh statistic is reported, not skipped, and is no mismatch.
-  CHECK(!checks[2].ok);
-  CHECK(contains(checks[2].notComparable, "not a mesh statistic"));
-  CHECK(contains(ndc::describeCheck(checks[2]), "expect boundary_components = 0: not comparable"));
+  CHECK(!checks[3].ok);
+  CHECK(contains(checks[3].notComparable, "not a mesh statistic"));
+  CHECK(contains(ndc::describeCheck(checks[3]), "expect boundary_loops = 0: not comparable"));
   CHECK(ndc::expectationMismatch(checks));
   x.other.erase("vertices");
   CHECK(!ndc::expectationMismatch(ndc::checkExpectation(x, closedSurface(-2), 2)));
@@ -131,7 +131,7 @@ TEST_CASE("expect: summary.json carries expect, singular points, perturbation", 
   ndc::Expectation x;
   x.components = 2;
   x.eulerCharacteristic = 0;
-  x.other = {{"boundary_components", 1}};
+  x.other = {{"boundary_loops", 1}};
   s.mesh = closedSurface(0);
   s.expect = ndc::checkExpectation(x, s.mesh, r.k);
   json = ndc::toJson(s);
@@ -145,8 +145,9 @@ TEST_CASE("expect: summary.json carries expect, singular points, perturbation", 
   CHECK(contains(json,
                  "\"expect\": {\"components\": {\"wanted\": 2, \"got\": 1, \"ok\": false}, "
                  "\"euler_characteristic\": {\"wanted\": 0, \"got\": 0, \"ok\": true}, "
-                 "\"boundary_components\": {\"wanted\": 1, \"got\": null, \"ok\": null, "
+                 "\"boundary_loops\": {\"wanted\": 1, \"got\": null, \"ok\": null, "
                  "\"not_comparable\": \"not a mesh statistic"));
+  CHECK(contains(json, "\"boundary_components\": 0"));
   // The document still flattens; the list elements are numbered paths.
   const auto numbers = ndc::flattenJsonNumbers(json);
   const auto has = [&](const std::string& name, const std::string& value) {

@@ -149,7 +149,7 @@ const std::string kHeader =
     "diagnostics.singular_cells,diagnostics.chord_failures,timing_s.subdivision,"
     "timing_s.projection,timing_s.connection,timing_s.analysis,timing_s.total,"
     "diagnostics.off_manifold_vertices,diagnostics.perturbation.attempts,"
-    "diagnostics.perturbation.degenerate_crossings";
+    "diagnostics.perturbation.degenerate_crossings,mesh.boundary_components";
 
 const std::string kTiny =
     "id = \"tiny\"\nartefact = \"table\"\ndescription = \"a tiny grid\"\n"

@@ -69,8 +69,8 @@ static int compileMagnitude(const ExprNode& node, std::vector<Op>& program,
     case Kind::kNumber:
       // A decimal literal is rounded once when it is read.
       ++ops;
-      constants.push_back(abs(node.literal.empty() ? S(node.value)
-                                                   : ScalarTraits<S>::fromString(node.literal)));
+      constants.push_back(
+          abs(node.literal.empty() ? S(node.value) : ScalarTraits<S>::fromString(node.literal)));
       program.push_back({Op::Kind::kConstant, static_cast<int>(constants.size()) - 1});
       return 0;
     case Kind::kVariable:
@@ -200,10 +200,16 @@ ProjectedPoint<S> NewtonProjection<S>::project(std::span<S> x) const {
   // Relative rank threshold: singular values below 8 n eps of the largest count as zero.
   cod.setThreshold(S(8 * n) * eps);
 
+  // The componentwise tolerance plus the normwise one, 2 eps |x|_inf |grad F_i|_1: a
+  // coordinate whose value at the root is 0 (M in a coordinate plane) otherwise never
+  // converges, its componentwise rounding being 0. Needs `jacobian` at x.
   const auto residualConverged = [&](const S& slack) {
     residualTolerance(x, tol);
+    const S normwise = 2 * eps * normInf<S>(x);
     for (int i = 0; i < m; ++i) {
-      if (!(abs(f[i]) <= slack * tol[i])) return false;
+      S gradient = 0;
+      for (int j = 0; j < n; ++j) gradient += abs(jacobian[std::size_t(i) * n + j]);
+      if (!(abs(f[i]) <= slack * (tol[i] + normwise * gradient))) return false;
     }
     return true;
   };
@@ -244,7 +250,7 @@ ProjectedPoint<S> NewtonProjection<S>::project(std::span<S> x) const {
     if (!isFinite(size) || size > divergence) return result;
     // Stagnation at the rounding floor: accept within a slack of the residual tolerance.
     if (stepNorm <= S(16) * eps * (1 + size)) {
-      system_->evaluate(x, f);
+      system_->evaluate(x, f, jacobian);
       result.converged = std::all_of(f.begin(), f.end(), isFinite<S>) && residualConverged(S(64));
       return result;
     }

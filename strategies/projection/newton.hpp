@@ -38,12 +38,16 @@ namespace ndc {
 /// coefficients), where `ops_i` is the operation count of the tree and `deg_i` its total
 /// degree. So no iterate can be told apart from a zero once
 ///
-///     |F_i(x)| <= tol_i(x) = 2 (ops_i + deg_i) eps |F_i|(|x|)   for every i,
+///     |F_i(x)| <= tol_i(x) + 2 eps |x|_inf |grad F_i(x)|_1,
+///     tol_i(x) = 2 (ops_i + deg_i) eps |F_i|(|x|)   for every i,
 ///
-/// with `eps = ScalarTraits<S>::epsilon()`; that is the test, applied before each step (so a
-/// point already on M stays put with 0 iterations). For O(1) coefficients and |x| = O(1) this
-/// is ~1e-14 in double and ~1e-36 in MPFR at 128 bits. Newton also stops when a step is below
-/// `16 eps (1 + |x|_inf)` (stagnation at the rounding floor); it then counts as converged iff
+/// with `eps = ScalarTraits<S>::epsilon()`. The second term is the normwise backward error
+/// (x moved by eps |x|_inf in every coordinate): without it a coordinate that is 0 at the
+/// root (M in a coordinate plane, e.g. a constraint `x3`) has no rounding of its own and the
+/// iterate, stuck at 1e-30 instead of 0, would never converge. That is the test, applied before
+/// each step (so a point already on M stays put with 0 iterations). For O(1) coefficients and |x| =
+/// O(1) this is ~1e-14 in double and ~1e-36 in MPFR at 128 bits. Newton also stops when a step is
+/// below `16 eps (1 + |x|_inf)` (stagnation at the rounding floor); it then counts as converged iff
 /// every `|F_i| <= 64 tol_i` (a tolerance for the first-order bound above being optimistic).
 ///
 /// **Divergence**: a non-finite F or iterate, or `|x|_inf > 1e4 (1 + |x_0|_inf)`, stops the
