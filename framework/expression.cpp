@@ -27,6 +27,12 @@ namespace {
 
 /// Largest exponent the parser accepts (a Bernstein degree beyond it is not a sane input).
 constexpr long kMaxExponent = 10000;
+/// Parentheses, signs and parenthesised exponents nest at most this deep: every evaluator
+/// walks the tree recursively, so its height must stay far below what the stack holds.
+constexpr int kMaxNesting = 200;
+/// Sums and products of more terms than this are built as balanced trees (height log2 of the
+/// count, so a sum of 100,000 terms is 17 levels); shorter ones keep the left-to-right order.
+constexpr std::size_t kBalanceAbove = 16;
 
 std::unique_ptr<ExprNode> makeNode(ExprNode::Kind kind) {
   auto node = std::make_unique<ExprNode>();
@@ -473,34 +479,107 @@ class Parser {
       ++pos_;
   }
 
+  /// Counts one level of nesting for its lifetime; past kMaxNesting the parse fails.
+  class Nest {
+   public:
+    explicit Nest(Parser& p) : p_(p) {
+      if (++p_.nesting_ > kMaxNesting)
+        p_.fail(p_.pos_, "expression nested too deeply (more than " + std::to_string(kMaxNesting) +
+                             " levels of parentheses, signs or exponents)");
+    }
+    ~Nest() { --p_.nesting_; }
+    Nest(const Nest&) = delete;
+    Nest& operator=(const Nest&) = delete;
+
+   private:
+    Parser& p_;
+  };
+
   std::unique_ptr<ExprNode> expression() {
-    auto left = term();
+    // The terms and whether each is subtracted.
+    std::vector<std::unique_ptr<ExprNode>> terms;
+    std::vector<bool> minus;
+    terms.push_back(term());
+    minus.push_back(false);
     for (;;) {
       skipSpace();
       char c = peek();
-      if (c != '+' && c != '-') return left;
+      if (c != '+' && c != '-') break;
       ++pos_;
-      left = makeBinary(c == '+' ? ExprNode::Kind::kAdd : ExprNode::Kind::kSub, std::move(left),
-                        term());
+      terms.push_back(term());
+      minus.push_back(c == '-');
     }
+    if (terms.size() <= kBalanceAbove) {
+      auto left = std::move(terms[0]);
+      for (std::size_t i = 1; i < terms.size(); ++i)
+        left = makeBinary(minus[i] ? ExprNode::Kind::kSub : ExprNode::Kind::kAdd, std::move(left),
+                          std::move(terms[i]));
+      return left;
+    }
+    return balancedSum(terms, minus, 0, terms.size());
+  }
+
+  /// sum_{lo <= i < hi} (s_i / s_lo) t_i with s_i = -1 for a subtracted term: the left half
+  /// plus or minus the right half, each relative to its own first sign.
+  static std::unique_ptr<ExprNode> balancedSum(std::vector<std::unique_ptr<ExprNode>>& terms,
+                                               const std::vector<bool>& minus, std::size_t lo,
+                                               std::size_t hi) {
+    if (hi - lo == 1) return std::move(terms[lo]);
+    const std::size_t mid = lo + (hi - lo) / 2;
+    auto left = balancedSum(terms, minus, lo, mid);
+    auto right = balancedSum(terms, minus, mid, hi);
+    return makeBinary(minus[mid] == minus[lo] ? ExprNode::Kind::kAdd : ExprNode::Kind::kSub,
+                      std::move(left), std::move(right));
   }
 
   std::unique_ptr<ExprNode> term() {
-    auto left = unary();
+    // The operands, each a factor ('*') or a constant divisor ('/').
+    std::vector<std::unique_ptr<ExprNode>> operands;
+    std::vector<bool> divide;
+    operands.push_back(unary());
+    divide.push_back(false);
     for (;;) {
       skipSpace();
       char c = peek();
       if (c == '*') {
         ++pos_;
-        left = makeBinary(ExprNode::Kind::kMul, std::move(left), unary());
+        operands.push_back(unary());
+        divide.push_back(false);
       } else if (c == '/') {
         ++pos_;
         skipSpace();
-        left = makeBinary(ExprNode::Kind::kDiv, std::move(left), divisor());
+        operands.push_back(divisor());
+        divide.push_back(true);
       } else {
-        return left;
+        break;
       }
     }
+    if (operands.size() <= kBalanceAbove) {
+      auto left = std::move(operands[0]);
+      for (std::size_t i = 1; i < operands.size(); ++i)
+        left = makeBinary(divide[i] ? ExprNode::Kind::kDiv : ExprNode::Kind::kMul, std::move(left),
+                          std::move(operands[i]));
+      return left;
+    }
+    // Long: each factor takes the divisors that follow it, then the factors are multiplied.
+    std::vector<std::unique_ptr<ExprNode>> factors;
+    for (std::size_t i = 0; i < operands.size(); ++i) {
+      if (divide[i]) {
+        factors.back() =
+            makeBinary(ExprNode::Kind::kDiv, std::move(factors.back()), std::move(operands[i]));
+      } else {
+        factors.push_back(std::move(operands[i]));
+      }
+    }
+    return balancedProduct(factors, 0, factors.size());
+  }
+
+  static std::unique_ptr<ExprNode> balancedProduct(std::vector<std::unique_ptr<ExprNode>>& factors,
+                                                   std::size_t lo, std::size_t hi) {
+    if (hi - lo == 1) return std::move(factors[lo]);
+    const std::size_t mid = lo + (hi - lo) / 2;
+    auto left = balancedProduct(factors, lo, mid);
+    return makeBinary(ExprNode::Kind::kMul, std::move(left), balancedProduct(factors, mid, hi));
   }
 
   // The right operand of '/': a constant subexpression certified nonzero.
@@ -523,12 +602,14 @@ class Parser {
   std::unique_ptr<ExprNode> unary() {
     skipSpace();
     if (peek() == '-') {
+      const Nest nest(*this);
       ++pos_;
       auto node = makeNode(ExprNode::Kind::kNeg);
       node->left = unary();
       return node;
     }
     if (peek() == '+') {
+      const Nest nest(*this);
       ++pos_;
       return unary();
     }
@@ -551,6 +632,7 @@ class Parser {
     std::size_t start = pos_;
     long value = 0;
     if (peek() == '(') {
+      const Nest nest(*this);
       ++pos_;
       value = exponent();
       skipSpace();
@@ -600,6 +682,7 @@ class Parser {
     if (isDigit(c) || c == '.') return number();
     if (isIdentifierStart(c)) return identifier();
     if (c == '(') {
+      const Nest nest(*this);
       std::size_t open = pos_++;
       auto node = expression();
       skipSpace();
@@ -670,6 +753,7 @@ class Parser {
   std::size_t pos_ = 0;
   /// Column (0-based) and index of the first variable seen in the current divisor, or -1.
   std::pair<std::size_t, int> firstVariable_{0, -1};
+  int nesting_ = 0;  ///< current depth of parentheses, signs and exponent parentheses
 };
 
 template <class X>

@@ -3,12 +3,16 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <random>
+#include <sstream>
+#include <type_traits>
 #include <variant>
 
 #include "analysis.hpp"
 #include "application.hpp"
+#include "bernstein.hpp"
 #include "grid.hpp"
 #include "scalar.hpp"
 #include "singular.hpp"
@@ -93,6 +97,31 @@ SolutionCells subdividePatches(const Problem& problem, const Settings& settings,
   return cells;
 }
 
+/// Refuses equations whose Bernstein form on the domain (or on each B-spline patch) is not
+/// finite or so large that subdividing it in double would overflow (1e308 * x^2 + ...).
+template <class S>
+void checkMagnitude(const Problem& problem, const Box<S>& domain) {
+  constexpr double kLimit = 1e300;
+  std::vector<Box<S>> boxes;
+  if (problem.roots.empty()) boxes.push_back(domain);
+  for (const Box<double>& patch : problem.roots) boxes.push_back(toScalarBox<S>(patch));
+  for (std::size_t i = 0; i < problem.equations.size(); ++i) {
+    for (const Box<S>& box : boxes) {
+      const Bernstein<S> form = problem.equations[i].template toBernstein<S>(box);
+      for (const S& c : form.coefficients()) {
+        using std::abs;
+        if (!(abs(c) <= S(kLimit))) {
+          std::ostringstream o;
+          o << problem.path << ": equation " << i + 1 << " reaches " << toDouble(c)
+            << " on the domain (its Bernstein coefficients must stay below " << kLimit
+            << " in magnitude for double arithmetic): rescale it, or use --scalar mpfr";
+          throw InputError(o.str());
+        }
+      }
+    }
+  }
+}
+
 template <class S>
 RunResult run(const Problem& problem, const Settings& settings, const Progress& progress) {
   const auto start = Clock::now();
@@ -110,6 +139,7 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   const Grid grid = makeGrid(problem, settings);
   const Box<S> domain = toScalarBox<S>(grid.domain);
   const System<S> system(problem);
+  if constexpr (std::is_same_v<S, double>) checkMagnitude<S>(problem, domain);
   if (!problem.roots.empty() && settings.jitter)
     throw InputError(
         "--jitter cannot be used with B-spline input: the knots must stay on grid planes");
@@ -223,6 +253,21 @@ RunResult runPipeline(const Problem& problem, const Settings& settings, const Pr
     throw InputError(problem.path + ": depth " + std::to_string(settings.depth) +
                      " is out of range for n = " + std::to_string(problem.n()) +
                      " (need 1 <= depth and n * depth <= 64)");
+  }
+  // Cells must stay wider than the rounding of their coordinates (and than subnormal numbers),
+  // or neighbouring grid planes coincide and cells collapse.
+  const double eps = std::numeric_limits<double>::epsilon();
+  for (int j = 0; j < problem.n(); ++j) {
+    const double lo = problem.domain.lo[j], hi = problem.domain.hi[j];
+    const double width = std::ldexp(hi - lo, -settings.depth);
+    if (!(width > 64 * eps * std::max(std::abs(lo), std::abs(hi))) ||
+        !(width > std::numeric_limits<double>::min() / eps)) {
+      std::ostringstream o;
+      o << problem.path << ": depth " << settings.depth << " is too deep for the domain [" << lo
+        << ", " << hi << "] of '" << problem.variables[j] << "': its cells (width " << width
+        << ") are below the rounding of their coordinates";
+      throw InputError(o.str());
+    }
   }
   // A k-manifold meets about c 2^(k L) cells of the final grid: refuse depths whose cell list
   // alone would not fit in memory rather than fail after minutes of work.

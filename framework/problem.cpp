@@ -156,6 +156,9 @@ class Validator : public TomlReader {
       if (!(lo < hi))
         fail(ranges[j], what + " is empty or inverted: lo = " + format(lo) +
                             " is not less than hi = " + format(hi));
+      if (!std::isfinite(hi - lo))
+        fail(ranges[j], what + " is too wide: hi - lo = " + format(hi) + " - " + format(lo) +
+                            " overflows a double");
       p.domain.lo.push_back(lo);
       p.domain.hi.push_back(hi);
     }
@@ -194,6 +197,12 @@ class Validator : public TomlReader {
         message << what << " needs " << coefficients << " Bernstein coefficients (the product of "
                 << "its degrees + 1); at most " << kMaxCoefficients << " are supported";
         fail(node, message.str());
+      }
+      const std::vector<int> degrees = e.degrees();
+      for (std::size_t j = 0; j < degrees.size(); ++j) {
+        if (degrees[j] > kMaxDegree)
+          fail(node, what + " has degree " + std::to_string(degrees[j]) + " in '" + variables[j] +
+                         "'; at most " + std::to_string(kMaxDegree) + " is supported");
       }
       return e;
     } catch (const ExpressionError& error) {

@@ -63,6 +63,10 @@ struct Problem {
 /// Largest number of Bernstein coefficients (product of degree + 1 over the variables) an
 /// equation may have; larger ones are rejected as bad input rather than exhausting memory.
 inline constexpr double kMaxCoefficients = 1e6;
+/// The largest degree of an equation in one variable: building the Bernstein form of a
+/// degree-d power costs about d^2 operations per coefficient, so past this a file could keep
+/// the tool busy for hours within the coefficient cap (x^10000, a product of 20,000 factors).
+inline constexpr int kMaxDegree = 1000;
 
 /// Whether `s` is a valid problem or experiment name: `[a-z0-9._-]+` (it names files and
 /// result folders).

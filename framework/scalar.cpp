@@ -18,14 +18,18 @@ unsigned setMpfrPrecision(unsigned bits) {
 }
 
 unsigned mpfrPrecision() {
-  return static_cast<unsigned>(boost::multiprecision::detail::digits10_2_2(Mpfr::default_precision()));
+  return static_cast<unsigned>(
+      boost::multiprecision::detail::digits10_2_2(Mpfr::default_precision()));
 }
 
 double ScalarTraits<double>::fromString(std::string_view text) {
+  // strtod, not stod: a literal below DBL_MIN (1e-320) is a subnormal or 0 with ERANGE, which
+  // stod reports as an error although the value is the nearest double.
   std::string s(text);
-  std::size_t used = 0;
-  double v = std::stod(s, &used);
-  if (used != s.size()) throw std::invalid_argument("not a number: " + s);
+  char* end = nullptr;
+  const double v = std::strtod(s.c_str(), &end);
+  if (s.empty() || end != s.c_str() + s.size()) throw std::invalid_argument("not a number: " + s);
+  if (!std::isfinite(v)) throw std::invalid_argument("number out of range (not finite): " + s);
   return v;
 }
 

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <sys/wait.h>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -199,6 +200,59 @@ TEST_CASE("B-spline surfaces: Bezier extraction matches the B-spline definition"
                 1e-13);
         }
       }
+  }
+}
+
+/// A seeded random knot vector the reader accepts: non-decreasing integers in [0, 7], a
+/// nonempty parameter range, interior multiplicities at most the degree, any multiplicity at
+/// the ends (clamped or not).
+std::vector<double> randomKnots(std::mt19937& rng, int degree, int count) {
+  std::uniform_int_distribution<int> value(0, 7);
+  for (;;) {
+    std::vector<double> k(std::size_t(count + degree + 1));
+    for (double& x : k) x = value(rng);
+    std::sort(k.begin(), k.end());
+    const double a = k[degree], b = k[count];
+    bool ok = a < b;
+    for (double x : k) ok = ok && !(x > a && x < b && std::count(k.begin(), k.end(), x) > degree);
+    if (ok) return k;
+  }
+}
+
+TEST_CASE("B-spline surfaces: unclamped and random knot vectors match the definition",
+          "[geometry]") {
+  // Knot insertion at the ends of an unclamped range once read past its arrays.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0, 1);
+  for (int trial = 0; trial < 60; ++trial) {
+    SurfaceSpec s;
+    s.name = "random";
+    s.degreeU = 1 + trial % 4;
+    s.degreeV = 1 + (trial / 4) % 3;
+    s.countU = s.degreeU + 1 + int(rng() % 4);
+    s.countV = s.degreeV + 1 + int(rng() % 3);
+    s.knotsU = randomKnots(rng, s.degreeU, s.countU);
+    s.knotsV = randomKnots(rng, s.degreeV, s.countV);
+    for (int j = 0; j < s.countV; ++j)
+      for (int i = 0; i < s.countU; ++i) s.points.push_back({unit(rng), unit(rng), unit(rng)});
+    const SurfaceExpr e = makeSurface(s, 2, 0, 1);
+    const std::vector<double> ku = distinctKnots(s, 0), kv = distinctKnots(s, 1);
+    for (std::size_t a = 0; a + 1 < ku.size(); ++a)
+      for (std::size_t b = 0; b + 1 < kv.size(); ++b)
+        for (double t : {0.2, 0.7}) {
+          const double u = ku[a] + t * (ku[a + 1] - ku[a]),
+                       v = kv[b] + (1 - t) * (kv[b + 1] - kv[b]);
+          INFO("trial " << trial << " u " << u << " v " << v);
+          const auto truth = deBoorPoint(s, u, v);
+          const auto point = s.evaluate(u, v);
+          const double x[2] = {spanCoordinate(s, 0, u), spanCoordinate(s, 1, v)};
+          const double w = e.W.evaluate<double>(std::span<const double>(x, 2));
+          for (int c = 0; c < 3; ++c) {
+            CHECK(std::abs(point[c] - truth[c]) < 1e-12);
+            CHECK(std::abs(e.P[c].evaluate<double>(std::span<const double>(x, 2)) / w - truth[c]) <
+                  1e-12);
+          }
+        }
   }
 }
 

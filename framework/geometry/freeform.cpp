@@ -15,8 +15,12 @@ using Vec4 = std::array<double, 4>;  // homogeneous control point (w x, w y, w z
 
 /// Boehm knot insertion of `t` into a B-spline curve of degree p with control points `ctrl`.
 void insertKnot(std::vector<double>& knots, std::vector<Vec4>& ctrl, int p, double t) {
-  // The span k with knots[k] <= t < knots[k + 1].
+  // The span k with knots[k] <= t < knots[k + 1]; at the upper end of the parameter range of an
+  // unclamped knot vector that span has no control points, so there k is the span with
+  // knots[k] < t <= knots[k + 1] (both give the same curve; each stays inside the arrays).
   int k = static_cast<int>(std::upper_bound(knots.begin(), knots.end(), t) - knots.begin()) - 1;
+  if (k > static_cast<int>(ctrl.size()) - 1)
+    k = static_cast<int>(std::lower_bound(knots.begin(), knots.end(), t) - knots.begin()) - 1;
   std::vector<Vec4> out(ctrl.size() + 1);
   for (int i = 0; i < static_cast<int>(out.size()); ++i) {
     if (i <= k - p) {

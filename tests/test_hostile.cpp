@@ -1,0 +1,109 @@
+// Hostile input through the command-line tool (issue 11): generated problem files that once
+// crashed the tool (stack overflow in the parser and the evaluators), said "internal error",
+// or solved garbage. Each must give exit 2 with one line naming the file, or a correct result.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "test_process.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path& scratch() {
+  static const ndc::test::ScratchDir dir("hostile");
+  return dir.path();
+}
+
+using Run = ndc::test::CliRun;
+
+Run ndcontour(const std::string& args) { return ndc::test::runNdcontour(args, scratch()); }
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+/// A problem in x, y on [-2, 2]^2 (or the given domain) with one equation.
+fs::path problem(const std::string& name, const std::string& equation,
+                 const std::string& domain = "[[-2, 2], [-2, 2]]") {
+  const fs::path file = scratch() / (name + ".toml");
+  std::ofstream(file) << "name = \"" << name
+                      << "\"\nvariables = [\"x\", \"y\"]\ndomain = " << domain
+                      << "\nequations = [\"" << equation << "\"]\n";
+  return file;
+}
+
+std::string repeat(const std::string& s, int count) {
+  std::string out;
+  out.reserve(s.size() * count);
+  for (int i = 0; i < count; ++i) out += s;
+  return out;
+}
+
+/// Exit 2, one line on stderr that names the file and holds `part`, nothing on stdout.
+void refused(const std::string& command, const fs::path& file, const std::string& part) {
+  const Run run = ndcontour(command + " " + ndc::test::quoted(file.string()));
+  INFO(command << " " << file.filename() << "\nstderr: " << run.err.substr(0, 400));
+  CHECK(run.status == 2);
+  CHECK(run.out.empty());
+  CHECK(std::count(run.err.begin(), run.err.end(), '\n') == 1);
+  CHECK(contains(run.err, file.string()));
+  CHECK(contains(run.err, part));
+}
+
+}  // namespace
+
+TEST_CASE("hostile: deep nesting is refused with a position, not a stack overflow",
+          "[cli][hostile]") {
+  const fs::path parens = problem("parens", repeat("(", 20000) + "x" + repeat(")", 20000) + " + y");
+  const fs::path minus = problem("minus", repeat("- ", 100000) + "x + y");
+  const fs::path exponent =
+      problem("exponent", "x^" + repeat("(", 10000) + "2" + repeat(")", 10000) + " + y");
+  for (const char* command : {"info", "solve --depth 3"}) {
+    refused(command, parens, "nested too deeply");
+    refused(command, minus, "nested too deeply");
+    refused(command, exponent, "nested too deeply");
+  }
+  // 200 levels are allowed (the limit is documented), and solve.
+  const fs::path fine = problem("fine", repeat("(", 150) + "x^2 + y^2 - 1" + repeat(")", 150));
+  const Run run = ndcontour("solve --depth 4 " + ndc::test::quoted(fine.string()));
+  INFO(run.err);
+  CHECK(run.status == 0);
+  CHECK(contains(run.out, "1 components"));
+}
+
+TEST_CASE("hostile: long sums and products are balanced, and solve", "[cli][hostile]") {
+  // 40,000 x and y: the line 40000 x + y = 1, a sum 40,000 levels deep if nested left to right.
+  const fs::path sum = problem("sum", repeat("x + ", 40000) + "y - 1");
+  const Run info = ndcontour("info " + ndc::test::quoted(sum.string()));
+  INFO(info.err);
+  CHECK(info.status == 0);
+  const Run solve = ndcontour("solve --depth 3 " + ndc::test::quoted(sum.string()));
+  INFO(solve.err);
+  CHECK(solve.status == 0);
+  CHECK(contains(solve.out, "1 components"));
+  // A product of 20,000 factors (1 + 0 x) and x: degree 20,001 in x, refused by the degree cap.
+  const fs::path product = problem("product", repeat("(1 + 0*x)*", 20000) + "x - y");
+  refused("info", product, "degree 20001 in 'x'");
+  refused("info", problem("power", "x^10000 + y - 1"), "at most 1000");
+}
+
+TEST_CASE("hostile: numeric edges are results or refusals naming the file", "[cli][hostile]") {
+  // Below DBL_MIN: the nearest double (a subnormal) is the value.
+  const fs::path tiny = problem("tiny", "x^2 + y^2 - 1 + 1e-320*x");
+  const Run run = ndcontour("solve --depth 4 " + ndc::test::quoted(tiny.string()));
+  INFO(run.err);
+  CHECK(run.status == 0);
+  CHECK(contains(run.out, "1 components"));
+  // A domain whose width overflows; one too narrow for the depth's cells.
+  refused("info", problem("wide", "x^2 + y^2 - 1", "[[-1e308, 1e308], [-2, 2]]"), "overflows");
+  refused("solve --depth 8", problem("narrow", "x + y - 2", "[[1, 1.000000000000001], [0.5, 1.5]]"),
+          "too deep for the domain");
+  // Coefficients that overflow double arithmetic.
+  refused("solve --depth 4", problem("huge", "1e308*x^2 + 1e308*y^2 - 1e308"), "rescale");
+}
