@@ -2,9 +2,14 @@
 
 #include "application.hpp"
 
+#include <signal.h>
 #include <unistd.h>
+
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -22,6 +27,47 @@ std::string number(double v) {
   std::snprintf(buffer, sizeof buffer, "%.17g", v);
   return buffer;
 }
+
+/// Paths an interrupt must remove: the staging folder of writeOutputs and its files, kept as
+/// plain character arrays so that the signal handler only calls unlink, rmdir and _exit.
+struct InterruptCleanup {
+  static constexpr std::size_t kPaths = 8, kLength = 4096;
+  std::array<std::array<char, kLength>, kPaths> files{};
+  std::array<char, kLength> folder{};
+  volatile sig_atomic_t count = 0;
+};
+InterruptCleanup cleanup;
+
+void copyPath(std::array<char, InterruptCleanup::kLength>& to, const std::filesystem::path& p) {
+  const std::string s = p.string();
+  const std::size_t n = std::min(s.size(), to.size() - 1);
+  std::memcpy(to.data(), s.data(), n);
+  to[n] = '\0';
+}
+
+extern "C" void onInterrupt(int signal) {
+  for (sig_atomic_t i = 0; i < cleanup.count; ++i) ::unlink(cleanup.files[i].data());
+  if (cleanup.folder[0] != '\0') ::rmdir(cleanup.folder.data());
+  ::_exit(128 + signal);
+}
+
+/// Blocks SIGINT and SIGTERM for its lifetime (the few renames that publish a run).
+class BlockInterrupts {
+ public:
+  BlockInterrupts() {
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, SIGINT);
+    sigaddset(&set, SIGTERM);
+    ::sigprocmask(SIG_BLOCK, &set, &saved_);
+  }
+  ~BlockInterrupts() { ::sigprocmask(SIG_SETMASK, &saved_, nullptr); }
+  BlockInterrupts(const BlockInterrupts&) = delete;
+  BlockInterrupts& operator=(const BlockInterrupts&) = delete;
+
+ private:
+  sigset_t saved_;
+};
 
 std::string numberList(const std::vector<double>& values) {
   std::string out = "[";
@@ -248,6 +294,14 @@ void writeRuledPly(std::ostream& out, const RunResult& r) {
   }
 }
 
+void installInterruptCleanup() {
+  struct sigaction action {};
+  action.sa_handler = onInterrupt;
+  sigemptyset(&action.sa_mask);
+  ::sigaction(SIGINT, &action, nullptr);
+  ::sigaction(SIGTERM, &action, nullptr);
+}
+
 std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const RunResult& result) {
   std::error_code error;
   std::filesystem::create_directories(dir, error);
@@ -271,9 +325,35 @@ std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const Ru
   }
   add("summary.json", [&](std::ostream& o) { o << toJson(result.summary); });
 
-  // The folder holds one whole run: a previous run's summary goes first (while the files are
-  // replaced the folder reads as unfinished), and so do its outputs that this run does not
-  // write (input.ply of an application problem).
+  // Stage: every file into a hidden folder inside `dir` first, so that a full disk or an
+  // interrupt while writing leaves the previous run untouched (an interrupt removes the
+  // staging folder: see installInterruptCleanup).
+  const auto staging = dir / (".ndcontour-partial-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(staging, error);
+  std::filesystem::create_directory(staging, error);
+  if (error) throw InputError(dir.string() + ": cannot create a temporary folder in it");
+  copyPath(cleanup.folder, staging);
+  const auto abandon = [&](const std::string& message) {
+    std::error_code ignored;
+    std::filesystem::remove_all(staging, ignored);
+    cleanup.count = 0;
+    cleanup.folder[0] = '\0';
+    throw InputError(message);
+  };
+  for (const auto& [name, text] : files) {
+    if (cleanup.count < static_cast<sig_atomic_t>(InterruptCleanup::kPaths)) {
+      copyPath(cleanup.files[cleanup.count], staging / name);
+      cleanup.count = cleanup.count + 1;
+    }
+    std::ofstream out(staging / name, std::ios::binary);
+    out << text;
+    out.flush();
+    if (!out) abandon((dir / name).string() + ": cannot write the file (disk full?)");
+  }
+  // Publish with SIGINT and SIGTERM held: the previous summary goes first (the folder reads as
+  // unfinished while files are replaced), and so do the previous outputs this run does not
+  // write (input.ply of an application problem); summary.json last marks a finished run.
+  const BlockInterrupts hold;
   const auto written = [&](const std::string& name) {
     for (const auto& f : files)
       if (f.first == name) return true;
@@ -282,14 +362,17 @@ std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const Ru
   for (const char* name : {"summary.json", "input.ply", "ruled.ply"})
     if (std::string(name) == "summary.json" || !written(name)) {
       std::filesystem::remove(dir / name, error);
-      if (error) throw InputError((dir / name).string() + ": cannot remove the previous output");
+      if (error) abandon((dir / name).string() + ": cannot remove the previous output");
     }
-  // summary.json last: its presence marks a finished run.
   std::vector<std::string> names;
   for (const auto& [name, text] : files) {
-    writeAtomically(dir / name, text);
+    std::filesystem::rename(staging / name, dir / name, error);
+    if (error) abandon((dir / name).string() + ": cannot write the file: " + error.message());
     names.push_back(name);
   }
+  std::filesystem::remove(staging, error);
+  cleanup.count = 0;
+  cleanup.folder[0] = '\0';
   return names;
 }
 

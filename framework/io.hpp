@@ -35,10 +35,17 @@ void writeAtomically(const std::filesystem::path& target, const std::string& tex
 
 /// Writes mesh.ply, cells.csv, singular.csv (input.ply and ruled.ply for applications that
 /// have them) and last summary.json into `dir` (created if needed); returns the file names
-/// written, in that order. Each file is written to a temporary name and renamed into place
-/// only when complete, so an existing output is never replaced by a partial one, and
-/// summary.json, whose presence marks a finished run, comes last. Throws ndc::InputError if
-/// `dir` cannot be written.
+/// written, in that order. Every file is first written into a hidden staging folder in `dir`
+/// (`.ndcontour-partial-PID`): a full disk or an interrupt there leaves the previous run whole.
+/// Then, with SIGINT and SIGTERM blocked, the previous summary.json is removed and the files
+/// are renamed into place, summary.json (whose presence marks a finished run) last. Throws
+/// ndc::InputError if `dir` cannot be written.
 std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const RunResult& result);
+
+/// Installs SIGINT and SIGTERM handlers for a `solve`: they remove writeOutputs' staging
+/// folder if one is being written and exit with status 128 + the signal (130, 143) at once.
+/// Nothing in `--out` has been touched before the outputs are published, so earlier results
+/// stay as they were.
+void installInterruptCleanup();
 
 }  // namespace ndc

@@ -61,6 +61,15 @@ Box<S> toScalarBox(const Box<double>& box) {
   return out;
 }
 
+/// The most solution cells a k-manifold can plausibly meet at depth L in R^n: a k-manifold of
+/// moderate size meets about c 2^(k L) cells of the final grid; the budget allows c up to
+/// 2^(n + 6), capped at 2^27 (the memory guard's scale). More cells mean a zero set of a
+/// higher dimension (x - x fills its domain: 2^(n L) cells).
+std::int64_t cellBudget(const Problem& problem, const Settings& settings) {
+  const int exponent = std::min(problem.k() * settings.depth + problem.n() + 6, 27);
+  return std::int64_t{1} << exponent;
+}
+
 /// ZeroSetSubdiv over the B-spline patches of a problem (Problem::roots): each patch is
 /// subdivided on its own, with its own Bernstein forms, down to the cells of the common grid, so
 /// the solution cells (and everything built from them) form one grid across patch boundaries.
@@ -80,7 +89,8 @@ SolutionCells subdividePatches(const Problem& problem, const Settings& settings,
         createBounding<S>(settings.bounding, problem, toScalarBox<S>(root));
     Progress part;
     if (progress) part = [&](const char* stage, double f) { progress(stage, (r + f) / roots); };
-    const SolutionCells found = subdivide<S>(bounding, subdivision, sub, part);
+    const SolutionCells found =
+        subdivide<S>(bounding, subdivision, sub, part, cellBudget(problem, settings));
     cells.visited += found.visited;
     // The patch's cell index at level J, then the cell's index inside it.
     for (std::size_t c = 0; c < found.size(); ++c) {
@@ -142,7 +152,8 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   if constexpr (std::is_same_v<S, double>) checkMagnitude<S>(problem, domain);
   if (!problem.roots.empty() && settings.jitter)
     throw InputError(
-        "--jitter cannot be used with B-spline input: the knots must stay on grid planes");
+        problem.path +
+        ": --jitter cannot be used with B-spline input: the knots must stay on grid planes");
   if (settings.depth < problem.rootLevel)
     throw InputError("depth " + std::to_string(settings.depth) + " is below " +
                      std::to_string(problem.rootLevel) +
@@ -159,9 +170,19 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
 
   // Alg. 1 (1): ZeroSetSubdiv: the solution cells of the final depth.
   auto t = Clock::now();
-  const SolutionCells cells =
-      bounding ? subdivide<S>(*bounding, subdivision, grid, progress)
-               : subdividePatches<S>(problem, settings, subdivision, grid, progress);
+  const SolutionCells cells = [&] {
+    try {
+      return bounding ? subdivide<S>(*bounding, subdivision, grid, progress,
+                                     cellBudget(problem, settings))
+                      : subdividePatches<S>(problem, settings, subdivision, grid, progress);
+    } catch (const CellBudgetExceeded& e) {
+      throw InputError(problem.path + ": " + e.what() + " (2^(k L + n + 6) with k = " +
+                       std::to_string(problem.k()) + ", L = " + std::to_string(settings.depth) +
+                       "): the zero set is not a " + std::to_string(problem.k()) +
+                       "-manifold (an equation that vanishes on a region, such as x - x, or "
+                       "equations that depend on each other)");
+    }
+  }();
   summary.tSubdivision = secondsSince(t);
   summary.visited = cells.visited;
   summary.solution = static_cast<std::int64_t>(cells.size());
@@ -237,13 +258,14 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
 
 int depthForTolerance(const Problem& problem, double tolerance) {
   if (!(tolerance > 0) || !std::isfinite(tolerance)) {
-    throw InputError("tolerance must be a positive number");
+    throw InputError(problem.path + ": tolerance must be a positive number");
   }
   double widest = 0;
   for (int j = 0; j < problem.n(); ++j) widest = std::max(widest, problem.domain.width(j));
   int depth = 0;
   while (widest / std::ldexp(1.0, depth) > tolerance) {
-    if (++depth > 30) throw InputError("tolerance too small: it needs a depth beyond 30");
+    if (++depth > 30)
+      throw InputError(problem.path + ": tolerance too small: it needs a depth beyond 30");
   }
   return std::max(depth, 1);
 }
@@ -253,6 +275,12 @@ RunResult runPipeline(const Problem& problem, const Settings& settings, const Pr
     throw InputError(problem.path + ": depth " + std::to_string(settings.depth) +
                      " is out of range for n = " + std::to_string(problem.n()) +
                      " (need 1 <= depth and n * depth <= 64)");
+  }
+  // The default connection builds curves and surfaces only: refuse other k before any work.
+  if (settings.connection == "crossing" && problem.k() != 1 && problem.k() != 2) {
+    throw InputError(problem.path + ": the crossing connection supports k = 1 (curves) and k = 2 " +
+                     "(surfaces); this problem has k = " + std::to_string(problem.k()) +
+                     " (n - m); use --connection paper or naive for k >= 3");
   }
   // Cells must stay wider than the rounding of their coordinates (and than subnormal numbers),
   // or neighbouring grid planes coincide and cells collapse.

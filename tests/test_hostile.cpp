@@ -3,10 +3,14 @@
 // or solved garbage. Each must give exit 2 with one line naming the file, or a correct result.
 #include <catch2/catch.hpp>
 
+#include <sys/wait.h>
+
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 
 #include "test_process.hpp"
 #include "test_support.hpp"
@@ -104,6 +108,44 @@ TEST_CASE("hostile: numeric edges are results or refusals naming the file", "[cl
   refused("info", problem("wide", "x^2 + y^2 - 1", "[[-1e308, 1e308], [-2, 2]]"), "overflows");
   refused("solve --depth 8", problem("narrow", "x + y - 2", "[[1, 1.000000000000001], [0.5, 1.5]]"),
           "too deep for the domain");
+  // k = 3 with the default connection: refused before any work, naming the file.
+  const fs::path k3 = scratch() / "k3.toml";
+  std::ofstream(k3) << "name = \"k3\"\nvariables = [\"x\", \"y\", \"z\", \"w\"]\n"
+                       "domain = [[-1, 1], [-1, 1], [-1, 1], [-1, 1]]\n"
+                       "equations = [\"x^2 + y^2 + z^2 + w^2 - 0.5\"]\n";
+  refused("solve --depth 3", k3, "k = 3");
+  // A zero set that fills the domain (x - x vanishes everywhere): stopped by the cell budget
+  // with a message that says why, not 2^20 cells and an empty mesh.
+  refused("solve --depth 10", problem("everywhere", "x - x + 0*y"), "is not a 1-manifold");
   // Coefficients that overflow double arithmetic.
   refused("solve --depth 4", problem("huge", "1e308*x^2 + 1e308*y^2 - 1e308"), "rescale");
+}
+
+TEST_CASE("hostile: SIGTERM and SIGINT during a solve leave the previous run whole",
+          "[cli][hostile]") {
+  // A first, finished run in `out`.
+  const fs::path out = scratch() / "interrupted";
+  const std::string torus = ndc::test::quoted(
+      (fs::path(ndc::test::sourceDir()) / "experiments" / "problems" / "torus-r6.toml").string());
+  const std::string circle = ndc::test::quoted(problem("circle", "x^2 + y^2 - 1").string());
+  REQUIRE(
+      ndcontour("solve " + circle + " --depth 4 --out " + ndc::test::quoted(out.string())).status ==
+      0);
+  const std::string summary = ndc::test::slurp(out / "summary.json");
+  const std::string mesh = ndc::test::slurp(out / "mesh.ply");
+  REQUIRE(!summary.empty());
+  for (const auto& [signal, status] : {std::pair{"TERM", 143}, std::pair{"INT", 130}}) {
+    // A solve of several seconds, interrupted after one.
+    const std::string command = "timeout --preserve-status -s " + std::string(signal) + " 1 " +
+                                ndc::test::quoted(ndc::test::binaryPath()) + " solve " + torus +
+                                " --depth 6 --out " + ndc::test::quoted(out.string()) +
+                                " >/dev/null 2>&1";
+    const int raw = std::system(command.c_str());
+    INFO("SIG" << signal);
+    CHECK((WIFEXITED(raw) && WEXITSTATUS(raw) == status));
+    CHECK(ndc::test::slurp(out / "summary.json") == summary);
+    CHECK(ndc::test::slurp(out / "mesh.ply") == mesh);
+    for (const auto& entry : fs::directory_iterator(out))
+      CHECK(entry.path().filename().string().rfind(".ndcontour-partial", 0) != 0);
+  }
 }

@@ -123,6 +123,7 @@ void printDiagnostics(const Summary& s) {
 int runSolve(SolveOptions options, const Problem& problem) {
   if (options.tolerance) options.settings.depth = depthForTolerance(problem, *options.tolerance);
   if (options.outDir) checkWritable(*options.outDir);
+  installInterruptCleanup();
   RunResult result = runPipeline(problem, options.settings, terminalProgress());
   // design.md 4.5: the mesh against the problem's [expect] (none: no `expect` in the summary).
   result.summary.expect = checkExpectation(problem.expect, result.summary.mesh, result.k);

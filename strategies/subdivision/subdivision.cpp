@@ -24,8 +24,9 @@ template <class B, class D>
 class Traversal {
  public:
   Traversal(const B& bounding, const D& subdivision, const Grid& grid, const Progress& progress,
-            SolutionCells& cells)
-      : bounding_(bounding),
+            SolutionCells& cells, std::int64_t maxCells)
+      : maxCells_(maxCells),
+        bounding_(bounding),
         subdivision_(subdivision),
         n_(grid.n),
         depth_(grid.n * grid.depth),
@@ -57,6 +58,10 @@ class Traversal {
   // axis d mod n and its children (lower first) are visited depth first.
   void descend(const typename B::State& state, int d) {
     if (d == depth_) {
+      if (maxCells_ > 0 && static_cast<std::int64_t>(cells_.size()) >= maxCells_) {
+        throw CellBudgetExceeded("more than " + std::to_string(maxCells_) +
+                                 " solution cells: the budget for this depth and k");
+      }
       cells_.add(index_);
       done(d);
       return;
@@ -87,6 +92,7 @@ class Traversal {
     nextReport_ = std::floor(fraction * 100.0 + 1.0) / 100.0;
   }
 
+  const std::int64_t maxCells_;  // 0: no budget
   const B& bounding_;
   const D& subdivision_;
   const int n_;
@@ -103,7 +109,7 @@ class Traversal {
 
 template <class S>
 SolutionCells subdivide(const Bounding<S>& bounding, const Subdivision& subdivision,
-                        const Grid& grid, const Progress& progress) {
+                        const Grid& grid, const Progress& progress, std::int64_t maxCells) {
   if (!Grid::fits(grid.n, grid.depth) || grid.depth < 0 || grid.n < 1)
     throw InputError("depth " + std::to_string(grid.depth) + " is too large for " +
                      std::to_string(grid.n) + " variables (n * depth must be at most 64)");
@@ -116,8 +122,8 @@ SolutionCells subdivide(const Bounding<S>& bounding, const Subdivision& subdivis
   // Dispatch once: the whole traversal is monomorphic in (bounding, subdivision).
   std::visit(
       [&](const auto& b, const auto& d) {
-        Traversal<std::decay_t<decltype(b)>, std::decay_t<decltype(d)>> traversal(b, d, grid,
-                                                                                  progress, cells);
+        Traversal<std::decay_t<decltype(b)>, std::decay_t<decltype(d)>> traversal(
+            b, d, grid, progress, cells, maxCells);
         traversal.run();
       },
       bounding, subdivision);
@@ -125,8 +131,8 @@ SolutionCells subdivide(const Bounding<S>& bounding, const Subdivision& subdivis
 }
 
 template SolutionCells subdivide<double>(const Bounding<double>&, const Subdivision&, const Grid&,
-                                         const Progress&);
+                                         const Progress&, std::int64_t);
 template SolutionCells subdivide<Mpfr>(const Bounding<Mpfr>&, const Subdivision&, const Grid&,
-                                       const Progress&);
+                                       const Progress&, std::int64_t);
 
 }  // namespace ndc

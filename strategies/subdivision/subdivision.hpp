@@ -66,14 +66,21 @@ Subdivision createSubdivision(std::string_view name);
 /// pair of bounding states per depth plus the output, so it grows with the number of solution
 /// cells, not with 2^(n L). `progress`, when set, receives ("subdivision", share of the domain's
 /// volume done) at most about 100 times. Throws InputError when the grid does not fit a CellKey
-/// (the packed cell index needs n * L <= 64), std::invalid_argument when grid and bounding disagree on n.
+/// (the packed cell index needs n * L <= 64), std::invalid_argument when grid and bounding disagree
+/// on n. `maxCells` > 0 is a budget: when more solution cells are found the traversal stops with
+/// ndc::CellBudgetExceeded (a zero set of a higher dimension than the problem's k).
 template <class S>
 SolutionCells subdivide(const Bounding<S>& bounding, const Subdivision& subdivision,
-                        const Grid& grid, const Progress& progress = {});
+                        const Grid& grid, const Progress& progress = {}, std::int64_t maxCells = 0);
+
+/// Thrown by subdivide when the solution cells exceed its budget.
+struct CellBudgetExceeded : InputError {
+  using InputError::InputError;
+};
 
 extern template SolutionCells subdivide<double>(const Bounding<double>&, const Subdivision&,
-                                                const Grid&, const Progress&);
+                                                const Grid&, const Progress&, std::int64_t);
 extern template SolutionCells subdivide<Mpfr>(const Bounding<Mpfr>&, const Subdivision&,
-                                              const Grid&, const Progress&);
+                                              const Grid&, const Progress&, std::int64_t);
 
 }  // namespace ndc
