@@ -538,16 +538,8 @@ class ConfigReader {
 
 ExperimentConfig loadExperimentConfig(const fs::path& file, bool quick) {
   const std::string name = file.string();
-  std::error_code ec;
-  if (fs::is_directory(file, ec))
-    throw InputError::at(name, 0, 0, "cannot read the experiment config: it is a directory");
-  std::ifstream in(file, std::ios::binary);
-  if (!in)
-    throw InputError::at(name, 0, 0,
-                         std::string("cannot read the experiment config: ") + std::strerror(errno));
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  const std::string text = buffer.str();
+  const std::string text = readInputFile(file, "experiment config");
+  checkTextEncoding(text, name);
   toml::table top;
   try {
     top = toml::parse(text, std::string_view(name));

@@ -6,6 +6,8 @@
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <set>
@@ -360,7 +362,73 @@ InputError InputError::at(const std::string& file, int line, int column,
   return InputError(oneLine(std::move(text)));
 }
 
+void checkTextEncoding(const std::string& text, const std::string& file) {
+  int line = 1, column = 1;
+  const auto bad = [&](const std::string& what) {
+    throw InputError::at(file, line, column, what + " (the file must be UTF-8 text)");
+  };
+  const auto* s = reinterpret_cast<const unsigned char*>(text.data());
+  const std::size_t size = text.size();
+  for (std::size_t i = 0; i < size;) {
+    const unsigned char c = s[i];
+    if (c < 0x80) {
+      if (c < 0x20 && c != '\t' && c != '\n' && c != '\r') {
+        char code[8];
+        std::snprintf(code, sizeof code, "0x%02x", static_cast<unsigned>(c));
+        bad(std::string("control character ") + code);
+      }
+      if (c == 0x7f) bad("control character 0x7f");
+      ++i;
+      if (c == '\n') {
+        ++line;
+        column = 1;
+      } else {
+        ++column;
+      }
+      continue;
+    }
+    // A multi-byte sequence: its length, the smallest code point it may encode, the value.
+    const int length = c >= 0xf0 ? 4 : c >= 0xe0 ? 3 : c >= 0xc0 ? 2 : 0;
+    if (length == 0 || c > 0xf4) bad("invalid UTF-8 byte");
+    if (i + length > size) bad("truncated UTF-8 sequence");
+    std::uint32_t value = c & (0x7f >> length);
+    for (int b = 1; b < length; ++b) {
+      if ((s[i + b] & 0xc0) != 0x80) bad("invalid UTF-8 sequence");
+      value = (value << 6) | (s[i + b] & 0x3f);
+    }
+    const std::uint32_t smallest = length == 2 ? 0x80 : length == 3 ? 0x800 : 0x10000;
+    if (value < smallest) bad("overlong UTF-8 sequence");
+    if (value > 0x10ffff || (value >= 0xd800 && value <= 0xdfff))
+      bad("UTF-8 sequence of an invalid code point");
+    if (value >= 0x80 && value < 0xa0) bad("control character (C1)");
+    i += static_cast<std::size_t>(length);
+    ++column;
+  }
+}
+
+std::string readInputFile(const std::filesystem::path& file, const std::string& what) {
+  const std::string name = file.string();
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec))
+    throw InputError::at(name, 0, 0, "cannot read the " + what + ": it is a directory");
+  std::ifstream in(file, std::ios::binary);
+  if (!in)
+    throw InputError::at(name, 0, 0, "cannot read the " + what + ": " + std::strerror(errno));
+  // In chunks, stopping one byte past the limit, so that an endless file (/dev/zero) ends here.
+  std::string text;
+  char chunk[1 << 16];
+  while (text.size() <= kMaxFileBytes && in.read(chunk, sizeof chunk).gcount() > 0)
+    text.append(chunk, static_cast<std::size_t>(in.gcount()));
+  if (in.bad()) throw InputError::at(name, 0, 0, "cannot read the " + what + ": read error");
+  if (text.size() > kMaxFileBytes)
+    throw InputError::at(
+        name, 0, 0,
+        "the " + what + " is larger than " + std::to_string(kMaxFileBytes >> 20) + " MiB");
+  return text;
+}
+
 Problem parseProblem(const std::string& text, const std::string& file) {
+  checkTextEncoding(text, file);
   toml::table root;
   try {
     root = toml::parse(text, std::string_view(file));
@@ -373,18 +441,7 @@ Problem parseProblem(const std::string& text, const std::string& file) {
 }
 
 Problem loadProblem(const std::filesystem::path& file) {
-  const std::string name = file.string();
-  std::error_code ec;
-  if (std::filesystem::is_directory(file, ec))
-    throw InputError::at(name, 0, 0, "cannot read the problem file: it is a directory");
-  std::ifstream in(file, std::ios::binary);
-  if (!in)
-    throw InputError::at(name, 0, 0,
-                         std::string("cannot read the problem file: ") + std::strerror(errno));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw InputError::at(name, 0, 0, "cannot read the problem file: read error");
-  return parseProblem(text.str(), name);
+  return parseProblem(readInputFile(file, "problem file"), file.string());
 }
 
 template <class S>

@@ -2,6 +2,7 @@
 /// Problem files (design.md 4.1): TOML with variables, a box domain and equations.
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -71,6 +72,20 @@ inline constexpr int kMaxDegree = 1000;
 /// Whether `s` is a valid problem or experiment name: `[a-z0-9._-]+` (it names files and
 /// result folders).
 bool isProblemName(const std::string& s);
+
+/// The largest problem or experiment file that is read (16 MiB).
+inline constexpr std::size_t kMaxFileBytes = std::size_t{16} << 20;
+
+/// The whole content of a problem or experiment file (`what` names it in messages: "problem
+/// file"); throws InputError when it cannot be read or is larger than kMaxFileBytes (so
+/// `/dev/zero` is refused, not read without bound).
+std::string readInputFile(const std::filesystem::path& file, const std::string& what);
+
+/// Throws InputError at the line and column of the first byte of `text` that is not valid
+/// UTF-8 (overlong forms, surrogates and code points above U+10FFFF included) or that is a
+/// control character other than tab, line feed and carriage return. Run before the TOML parser
+/// sees the text, and echoes no offending byte.
+void checkTextEncoding(const std::string& text, const std::string& file);
 
 /// Reads and validates a problem file; throws InputError.
 Problem loadProblem(const std::filesystem::path& file);

@@ -149,3 +149,42 @@ TEST_CASE("hostile: SIGTERM and SIGINT during a solve leave the previous run who
       CHECK(entry.path().filename().string().rfind(".ndcontour-partial", 0) != 0);
   }
 }
+
+TEST_CASE("hostile: bytes that are not UTF-8 text, and endless files, are refused",
+          "[cli][hostile]") {
+  const auto write = [](const std::string& name, const std::string& text) {
+    const fs::path file = scratch() / name;
+    std::ofstream(file, std::ios::binary) << text;
+    return file;
+  };
+  const std::string head = "name = \"p\"\nvariables = [\"x\", \"y\"]\n";
+  const std::string tail = "domain = [[-2, 2], [-2, 2]]\nequations = [\"x^2 + y^2 - 1\"]\n";
+  // An invalid byte, an overlong '/', a surrogate and an escape character, each in a
+  // description on line 3; the message gives the position and echoes none of them.
+  const std::pair<std::string, std::string> cases[] = {
+      {"description = \"a\xff\"\n", "invalid UTF-8 byte"},
+      {"description = \"a\xc0\xaf\"\n", "overlong UTF-8 sequence"},
+      {"description = \"a\xed\xa0\x80\"\n", "invalid code point"},
+      {"description = \"a\x1b[31m\"\n", "control character 0x1b"},
+  };
+  int i = 0;
+  for (const auto& [line, part] : cases) {
+    const fs::path file = write("bytes" + std::to_string(i++) + ".toml", head + line + tail);
+    refused("info", file, part);
+    refused("info", file, file.string() + ":3:");
+    const Run run = ndcontour("info " + ndc::test::quoted(file.string()));
+    CHECK(run.err.find('\x1b') == std::string::npos);
+    CHECK(run.err.find('\xff') == std::string::npos);
+  }
+  // UTF-8 text is fine.
+  const Run fine = ndcontour(
+      "info " + ndc::test::quoted(write("utf8.toml", head +
+                                                         "description = \"\xc3\xa9t\xc3\xa9 "
+                                                         "\xe2\x88\x9a\"\n" +
+                                                         tail)
+                                      .string()));
+  INFO(fine.err);
+  CHECK(fine.status == 0);
+  // /dev/zero would be read without bound: refused at 16 MiB.
+  refused("info", "/dev/zero", "larger than 16 MiB");
+}
