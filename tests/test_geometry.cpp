@@ -77,6 +77,21 @@ double spanCoordinate(const SurfaceSpec& s, int d, double x) {
   return static_cast<double>(i) + (x - k[i]) / (k[i + 1] - k[i]);
 }
 
+/// The surface point at (u, v) by SurfaceSpec::evaluate and by the built expressions (on span
+/// coordinates) against the B-spline definition, to within `tolerance`.
+void checkAgainstDefinition(const SurfaceSpec& s, const SurfaceExpr& e, double u, double v,
+                            double tolerance) {
+  const auto truth = deBoorPoint(s, u, v);
+  const auto point = s.evaluate(u, v);
+  const double x[2] = {spanCoordinate(s, 0, u), spanCoordinate(s, 1, v)};
+  const double w = e.W.evaluate<double>(std::span<const double>(x, 2));
+  for (int c = 0; c < 3; ++c) {
+    CHECK(std::abs(point[c] - truth[c]) < tolerance);
+    CHECK(std::abs(e.P[c].evaluate<double>(std::span<const double>(x, 2)) / w - truth[c]) <
+          tolerance);
+  }
+}
+
 /// A plane section of a surface: z(u, v) = c, i.e. Z - c W = 0, a curve in (u, v).
 Problem sectionProblem(const SurfaceSpec& s, double c) {
   Problem p;
@@ -190,15 +205,7 @@ TEST_CASE("B-spline surfaces: Bezier extraction matches the B-spline definition"
     for (double u : {0.0, 0.1, 0.39, 0.4, 0.41, 0.7, 1.0})
       for (double v : {0.0, 0.33, 0.55, 0.8, 1.0}) {
         INFO("rational " << rational << " u " << u << " v " << v);
-        const auto truth = deBoorPoint(s, u, v);
-        const auto point = s.evaluate(u, v);
-        const double x[2] = {spanCoordinate(s, 0, u), spanCoordinate(s, 1, v)};
-        const double w = e.W.evaluate<double>(std::span<const double>(x, 2));
-        for (int c = 0; c < 3; ++c) {
-          CHECK(std::abs(point[c] - truth[c]) < 1e-13);
-          CHECK(std::abs(e.P[c].evaluate<double>(std::span<const double>(x, 2)) / w - truth[c]) <
-                1e-13);
-        }
+        checkAgainstDefinition(s, e, u, v, 1e-13);
       }
   }
 }
@@ -243,15 +250,7 @@ TEST_CASE("B-spline surfaces: unclamped and random knot vectors match the defini
           const double u = ku[a] + t * (ku[a + 1] - ku[a]),
                        v = kv[b] + (1 - t) * (kv[b + 1] - kv[b]);
           INFO("trial " << trial << " u " << u << " v " << v);
-          const auto truth = deBoorPoint(s, u, v);
-          const auto point = s.evaluate(u, v);
-          const double x[2] = {spanCoordinate(s, 0, u), spanCoordinate(s, 1, v)};
-          const double w = e.W.evaluate<double>(std::span<const double>(x, 2));
-          for (int c = 0; c < 3; ++c) {
-            CHECK(std::abs(point[c] - truth[c]) < 1e-12);
-            CHECK(std::abs(e.P[c].evaluate<double>(std::span<const double>(x, 2)) / w - truth[c]) <
-                  1e-12);
-          }
+          checkAgainstDefinition(s, e, u, v, 1e-12);
         }
   }
 }
