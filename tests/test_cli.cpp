@@ -201,6 +201,7 @@ TEST_CASE("cli: usage errors exit 2 with one line", "[cli]") {
   checkBadInput(ndcontour("solve " + valid + " --tolerance 0"), {"--tolerance"});
   checkBadInput(ndcontour("solve " + valid + " --jitter abc"), {"--jitter"});
   checkBadInput(ndcontour("solve " + valid + " --jitter -3"), {"--jitter", "not an integer"});
+  checkBadInput(ndcontour("bench " + valid + " --jitter -1"), {"--jitter", "not an integer"});
   checkBadInput(ndcontour("solve " + valid + " --jitter 1e3"), {"--jitter", "not an integer"});
   checkBadInput(ndcontour("solve " + valid + " --scalar mpfr --precision -5"), {"--precision"});
   checkBadInput(ndcontour("solve " + valid + " --scalar mpfr --precision 99999999999"),

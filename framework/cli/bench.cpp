@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <vector>
 
 #include "cli/commands.hpp"
@@ -29,7 +30,9 @@ void addBenchOptions(CLI::App& bench, BenchOptions& o) {
       ->capture_default_str();
   bench.add_option("--scalar", o.settings.scalar, "Scalar type")->capture_default_str();
   bench.add_option("--precision", o.settings.precisionBits, "MPFR precision in bits");
-  bench.add_option("--jitter", o.jitter, "Grid jitter seed");
+  bench.add_option("--jitter", o.jitter, "Grid jitter seed")
+      ->check(unsignedUpTo(std::numeric_limits<std::uint64_t>::max()))
+      ->type_name("SEED");
   bench.add_option("--repeat", o.repeat, "Runs per problem (the median is reported)")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();

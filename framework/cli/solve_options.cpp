@@ -33,7 +33,8 @@ void checkName(const std::string& flag, const std::string& value,
   throw UsageError(flag + ": unknown " + family + " '" + value + "' (accepted: " + accepted + ")");
 }
 
-/// Accepts a decimal integer in [0, max]: CLI11 would wrap "-3" or an overflow silently.
+}  // namespace
+
 CLI::Validator unsignedUpTo(std::uint64_t max) {
   return CLI::Validator(
       [max](std::string& text) -> std::string {
@@ -45,8 +46,6 @@ CLI::Validator unsignedUpTo(std::uint64_t max) {
       },
       "", "unsigned");
 }
-
-}  // namespace
 
 void addSolveOptions(CLI::App& solve, SolveOptions& o) {
   Settings& s = o.settings;

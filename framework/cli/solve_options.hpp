@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -14,7 +15,8 @@
 
 namespace CLI {
 class App;
-}
+class Validator;
+}  // namespace CLI
 
 namespace ndc::cli {
 
@@ -64,6 +66,10 @@ inline constexpr const char* kExitStatusHelp =
     "Exit status: 0 success (a mismatch with [expect] is only a warning without --check), 1 "
     "internal error, 2 bad input or usage (one line on standard error naming the file), 3 "
     "solve --check: the mesh differs from the problem's [expect].";
+
+/// A CLI11 check that accepts a decimal integer in [0, max] (CLI11 alone would wrap "-3" or an
+/// overflow silently), for `--jitter` of `solve` and `bench`.
+CLI::Validator unsignedUpTo(std::uint64_t max);
 
 /// Declares the options of the `solve` subcommand on `solve`, writing into `options`.
 void addSolveOptions(CLI::App& solve, SolveOptions& options);
