@@ -920,7 +920,31 @@ struct Outcome {
 };
 
 volatile std::sig_atomic_t gInterrupted = 0;
-void onInterrupt(int) { gInterrupted = 1; }
+void onInterrupt(int signal) { gInterrupted = signal; }
+
+/// Stops child processes: SIGTERM first, so that a solve removes its staging folder and leaves
+/// its run directory whole, then SIGKILL for any still running after a second. Returns each
+/// child's wait status, in the order given.
+std::vector<int> stopChildren(const std::vector<pid_t>& pids) {
+  std::vector<int> statuses(pids.size(), 0);
+  std::vector<bool> done(pids.size(), false);
+  for (pid_t pid : pids) ::kill(pid, SIGTERM);
+  const auto deadline = Clock::now() + std::chrono::seconds(1);
+  for (std::size_t left = pids.size(); left > 0;) {
+    for (std::size_t i = 0; i < pids.size(); ++i) {
+      if (done[i]) continue;
+      const bool late = Clock::now() > deadline;
+      if (late) ::kill(pids[i], SIGKILL);
+      const pid_t got = ::waitpid(pids[i], &statuses[i], late ? 0 : WNOHANG);
+      if (got == pids[i] || (got < 0 && errno != EINTR)) {
+        done[i] = true;
+        --left;
+      }
+    }
+    if (left > 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return statuses;
+}
 
 /// The last non-empty line of a file (of its last 64 KiB), at most 300 characters.
 std::string lastLine(const fs::path& file) {
@@ -1334,9 +1358,7 @@ int runExperiment(ExperimentConfig config, const ExperimentOptions& options) {
         const double elapsed = std::chrono::duration<double>(Clock::now() - it->start).count();
         bool timedOut = false;
         if (got == 0 && elapsed > config.timeoutS) {
-          ::kill(it->pid, SIGKILL);
-          while (::waitpid(it->pid, &status, 0) < 0 && errno == EINTR) {
-          }
+          status = stopChildren({it->pid}).front();
           timedOut = true;
         } else if (got == 0 || (got < 0 && errno == EINTR)) {
           ++it;
@@ -1365,18 +1387,15 @@ int runExperiment(ExperimentConfig config, const ExperimentOptions& options) {
 
   if (gInterrupted) {
     // Finished runs keep their summaries; the rest run on the next invocation.
-    for (const Child& child : running) {
-      ::kill(child.pid, SIGKILL);
-      int status = 0;
-      while (::waitpid(child.pid, &status, 0) < 0 && errno == EINTR) {
-      }
-    }
+    std::vector<pid_t> pids;
+    for (const Child& child : running) pids.push_back(child.pid);
+    stopChildren(pids);
     progress.end();
     std::fprintf(stderr,
                  "experiment %s: interrupted; finished runs are kept and the next invocation "
                  "resumes\n",
                  config.id.c_str());
-    return 130;
+    return 128 + gInterrupted;
   }
   progress.end();
 

@@ -147,7 +147,8 @@ struct ExperimentOptions {
 /// Runs every unfinished run of the grid (a run is finished when its summary.json exists),
 /// at most `jobs` at once, each limited to `timeoutS`, and writes `<out>/<id>/<id>.csv` and
 /// `provenance.json`. Progress goes to standard error, the final report to standard output.
-/// Returns 0 when every run succeeded, 1 when any failed, 130 when interrupted. Throws
+/// Returns 0 when every run succeeded, 1 when any failed, 128 + the signal (130, 143) when
+/// interrupted by SIGINT or SIGTERM. Throws
 /// InputError when the output directory cannot be written.
 int runExperiment(ExperimentConfig config, const ExperimentOptions& options);
 

@@ -3,6 +3,7 @@
 #include "application.hpp"
 
 #include <signal.h>
+#include <sys/time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -35,6 +36,11 @@ struct InterruptCleanup {
   std::array<std::array<char, kLength>, kPaths> files{};
   std::array<char, kLength> folder{};
   volatile sig_atomic_t count = 0;
+  /// The line armTimeout's alarm prints, its exit status, and whether the outputs are already
+  /// published (an alarm held back by the publication then has nothing left to stop).
+  std::array<char, kLength> timeoutLine{};
+  volatile sig_atomic_t timeoutStatus = 0;
+  volatile sig_atomic_t published = 0;
 };
 InterruptCleanup cleanup;
 
@@ -45,13 +51,29 @@ void copyPath(std::array<char, InterruptCleanup::kLength>& to, const std::filesy
   to[n] = '\0';
 }
 
-extern "C" void onInterrupt(int signal) {
+/// Removes the staging folder (only async-signal-safe calls).
+void removeStaging() {
   for (sig_atomic_t i = 0; i < cleanup.count; ++i) ::unlink(cleanup.files[i].data());
   if (cleanup.folder[0] != '\0') ::rmdir(cleanup.folder.data());
+}
+
+extern "C" void onInterrupt(int signal) {
+  removeStaging();
   ::_exit(128 + signal);
 }
 
-/// Blocks SIGINT and SIGTERM for its lifetime (the few renames that publish a run).
+extern "C" void onTimeout(int) {
+  if (cleanup.published) return;
+  removeStaging();
+  const char* line = cleanup.timeoutLine.data();
+  std::size_t length = 0;
+  while (line[length] != '\0') ++length;
+  [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, line, length);
+  ::_exit(cleanup.timeoutStatus);
+}
+
+/// Blocks SIGINT, SIGTERM and armTimeout's SIGALRM for its lifetime (the few renames that
+/// publish a run).
 class BlockInterrupts {
  public:
   BlockInterrupts() {
@@ -59,6 +81,7 @@ class BlockInterrupts {
     sigemptyset(&set);
     sigaddset(&set, SIGINT);
     sigaddset(&set, SIGTERM);
+    sigaddset(&set, SIGALRM);
     ::sigprocmask(SIG_BLOCK, &set, &saved_);
   }
   ~BlockInterrupts() { ::sigprocmask(SIG_SETMASK, &saved_, nullptr); }
@@ -156,6 +179,10 @@ std::string toJson(const Summary& s) {
     << ", \"projection\": " << number(s.tProjection)
     << ", \"connection\": " << number(s.tConnection) << ", \"analysis\": " << number(s.tAnalysis)
     << ", \"total\": " << number(s.tTotal) << "}";
+  // Extension: the run's budgets (docs/input-limits.md) and the memory it was estimated to need.
+  o << ",\n  \"budget\": {\"max_memory_bytes\": " << number(s.memoryBudget)
+    << ", \"estimated_memory_bytes\": " << number(s.estimatedMemory)
+    << ", \"timeout_s\": " << (t.timeoutSeconds ? number(*t.timeoutSeconds) : "null") << "}";
   // Extension (design.md 4.5): the problem's [expect] compared with the mesh, when it has one.
   if (!s.expect.empty()) {
     o << ",\n  \"expect\": {";
@@ -302,6 +329,28 @@ void installInterruptCleanup() {
   ::sigaction(SIGTERM, &action, nullptr);
 }
 
+void armTimeout(double seconds, const std::string& line, int status) {
+  copyPath(cleanup.timeoutLine, line + "\n");
+  cleanup.timeoutStatus = status;
+  cleanup.published = 0;
+  struct sigaction action {};
+  action.sa_handler = onTimeout;
+  sigemptyset(&action.sa_mask);
+  ::sigaction(SIGALRM, &action, nullptr);
+  itimerval timer{};
+  const double whole = std::floor(seconds);
+  timer.it_value.tv_sec = static_cast<time_t>(whole);
+  timer.it_value.tv_usec = static_cast<suseconds_t>((seconds - whole) * 1e6);
+  if (timer.it_value.tv_sec == 0 && timer.it_value.tv_usec == 0) timer.it_value.tv_usec = 1;
+  ::setitimer(ITIMER_REAL, &timer, nullptr);
+}
+
+void disarmTimeout() {
+  cleanup.published = 1;
+  itimerval none{};
+  ::setitimer(ITIMER_REAL, &none, nullptr);
+}
+
 std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const RunResult& result) {
   std::error_code error;
   std::filesystem::create_directories(dir, error);
@@ -373,6 +422,8 @@ std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const Ru
   std::filesystem::remove(staging, error);
   cleanup.count = 0;
   cleanup.folder[0] = '\0';
+  // The run is published: a timeout held back until here has nothing left to stop.
+  cleanup.published = 1;
   return names;
 }
 

@@ -48,4 +48,13 @@ std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const Ru
 /// stay as they were.
 void installInterruptCleanup();
 
+/// Arms a wall-clock limit of `seconds` for a `solve`: when it expires, the staging folder of
+/// writeOutputs (if one is being written) is removed, `line` is printed on standard error and
+/// the process exits with `status`. An expiry while the outputs are being published waits for
+/// the publication to end and is then ignored: the run finished.
+void armTimeout(double seconds, const std::string& line, int status);
+
+/// Stops the limit of armTimeout: the run is finished and only prints what it found.
+void disarmTimeout();
+
 }  // namespace ndc

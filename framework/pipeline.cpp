@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <optional>
 #include <random>
@@ -13,6 +14,7 @@
 #include "analysis.hpp"
 #include "application.hpp"
 #include "bernstein.hpp"
+#include "budget.hpp"
 #include "grid.hpp"
 #include "scalar.hpp"
 #include "singular.hpp"
@@ -65,9 +67,112 @@ Box<S> toScalarBox(const Box<double>& box) {
 /// moderate size meets about c 2^(k L) cells of the final grid; the budget allows c up to
 /// 2^(n + 6), capped at 2^27 (the memory guard's scale). More cells mean a zero set of a
 /// higher dimension (x - x fills its domain: 2^(n L) cells).
-std::int64_t cellBudget(const Problem& problem, const Settings& settings) {
-  const int exponent = std::min(problem.k() * settings.depth + problem.n() + 6, 27);
+std::int64_t cellBudget(const Problem& problem, int depth) {
+  const int exponent = std::min(problem.k() * depth + problem.n() + 6, 27);
   return std::int64_t{1} << exponent;
+}
+
+/// What is left of a budget of `maxCells` solution cells once `used` are found (subdivide
+/// reads 0 as no budget, so an exhausted budget is exceeded here).
+std::int64_t remaining(std::int64_t maxCells, std::size_t used) {
+  const std::int64_t left = maxCells - static_cast<std::int64_t>(used);
+  if (left <= 0)
+    throw CellBudgetExceeded("more than " + std::to_string(maxCells) + " solution cells");
+  return left;
+}
+
+/// The message for more solution cells than a k-manifold can meet (cellBudget).
+std::string notAManifold(const Problem& problem, const Settings& settings, std::int64_t cells) {
+  return problem.path + ": more than " + std::to_string(cells) + " solution cells at depth " +
+         std::to_string(settings.depth) +
+         " (2^(k L + n + 6) with k = " + std::to_string(problem.k()) +
+         ", L = " + std::to_string(settings.depth) + "): the zero set is not a " +
+         std::to_string(problem.k()) +
+         "-manifold (an equation that vanishes on a region, such as x - x, or equations that "
+         "depend on each other)";
+}
+
+/// The memory budget of a run and what it allows (design of the estimate: docs/
+/// input-limits.md, "Budgets").
+struct MemoryPlan {
+  double budget = 0;   ///< bytes the run may use
+  double perCell = 0;  ///< bytes per solution cell (bytesPerSolutionCell)
+  double base = 0;     ///< bytes whatever the size (baseRunBytes)
+  bool byDefault = true;
+  std::int64_t maxCells = 0;  ///< solution cells the budget holds
+
+  /// Bytes for `cells` solution cells.
+  double bytes(double cells) const { return base + cells * perCell; }
+
+  /// The refusal of a run that needs `cells` solution cells: `prefix` ("more than ") and
+  /// `suffix` (how the count is known) qualify the count.
+  std::string overBudget(const Problem& problem, const Settings& settings, double cells,
+                         const std::string& prefix = "", const std::string& suffix = "") const {
+    char count[32];
+    std::snprintf(count, sizeof count, cells < 1e7 ? "%.0f" : "%.3g", cells);
+    return problem.path + ": depth " + std::to_string(settings.depth) + " needs " +
+           (prefix.empty() ? "about " : prefix) + formatBytes(bytes(cells)) + " of memory (" +
+           prefix + count + " solution cells" + suffix + "), over the budget of " +
+           formatBytes(budget) + (byDefault ? " (75% of this machine's memory)" : "") +
+           ": use a smaller depth, or --max-memory if the machine has more";
+  }
+};
+
+/// The memory plan of a run: its budget, and a refusal before any long work of a depth that
+/// cannot fit. A k-manifold meets about c 2^(k L) cells of the depth-L grid, so where the
+/// a-priori bound (cellBudget, and the 2^(n L) cells of the grid) does not fit the budget, a
+/// trial subdivision at coarser depths (`count(grid)`: the solution cells there) measures c
+/// and the count at depth L is extrapolated by 2^k per level. At coarse depths the ratio per
+/// level is at most 2^k for a smooth M, so the extrapolation errs high; what it misses (a
+/// feature too small for the trial) is refused after the real subdivision, which counts
+/// exactly, and the address-space limit catches the rest.
+template <class Count>
+MemoryPlan planMemory(const Problem& problem, const Settings& settings, const Grid& grid,
+                      const Count& count) {
+  MemoryPlan plan;
+  plan.byDefault = settings.maxMemoryBytes == 0;
+  plan.budget =
+      static_cast<double>(plan.byDefault ? defaultMemoryBudget() : settings.maxMemoryBytes);
+  plan.perCell =
+      bytesPerSolutionCell(problem.n(), problem.k(), settings.scalar, settings.precisionBits);
+  plan.base = baseRunBytes(problem.n());
+  if (plan.budget <= plan.base)
+    throw InputError(problem.path + ": the memory budget of " + formatBytes(plan.budget) +
+                     " is below the " + formatBytes(plan.base) + " any run of " +
+                     std::to_string(problem.n()) + " variables needs (--max-memory)");
+  const double cellsFit = std::floor((plan.budget - plan.base) / plan.perCell);
+  plan.maxCells = static_cast<std::int64_t>(std::min(cellsFit, 9e18));
+
+  const int L = settings.depth, k = problem.k();
+  const double crude = std::min(static_cast<double>(cellBudget(problem, L)),
+                                std::ldexp(1.0, std::min(problem.n() * L, 1000)));
+  if (plan.bytes(crude) <= plan.budget) return plan;
+  // The trial: coarse depths until the count is large enough to extrapolate from, or a second
+  // of work is spent.
+  constexpr std::size_t kEnough = 2048;
+  constexpr double kTrialSeconds = 1.0;
+  const auto start = Clock::now();
+  for (int depth = std::max(1, problem.rootLevel); depth < L; ++depth) {
+    Grid trial = grid;
+    trial.depth = depth;
+    std::size_t found = 0;
+    try {
+      found = count(trial);
+    } catch (const CellBudgetExceeded&) {
+      Settings at = settings;
+      at.depth = depth;
+      throw InputError(notAManifold(problem, at, cellBudget(problem, depth)));
+    }
+    if (found >= kEnough || depth == L - 1 || secondsSince(start) > kTrialSeconds) {
+      const double estimate = static_cast<double>(found) * std::ldexp(1.0, k * (L - depth));
+      if (plan.bytes(estimate) > plan.budget)
+        throw InputError(plan.overBudget(
+            problem, settings, estimate, "",
+            ", estimated from " + std::to_string(found) + " at depth " + std::to_string(depth)));
+      break;
+    }
+  }
+  return plan;
 }
 
 /// ZeroSetSubdiv over the B-spline patches of a problem (Problem::roots): each patch is
@@ -76,7 +181,7 @@ std::int64_t cellBudget(const Problem& problem, const Settings& settings) {
 template <class S>
 SolutionCells subdividePatches(const Problem& problem, const Settings& settings,
                                const Subdivision& subdivision, const Grid& grid,
-                               const Progress& progress) {
+                               const Progress& progress, std::int64_t maxCells) {
   const int n = grid.n, below = grid.depth - problem.rootLevel;
   SolutionCells cells;
   cells.grid = grid;
@@ -90,7 +195,7 @@ SolutionCells subdividePatches(const Problem& problem, const Settings& settings,
     Progress part;
     if (progress) part = [&](const char* stage, double f) { progress(stage, (r + f) / roots); };
     const SolutionCells found =
-        subdivide<S>(bounding, subdivision, sub, part, cellBudget(problem, settings));
+        subdivide<S>(bounding, subdivision, sub, part, remaining(maxCells, cells.size()));
     cells.visited += found.visited;
     // The patch's cell index at level J, then the cell's index inside it.
     for (std::size_t c = 0; c < found.size(); ++c) {
@@ -107,10 +212,11 @@ SolutionCells subdividePatches(const Problem& problem, const Settings& settings,
   return cells;
 }
 
-/// Refuses equations whose Bernstein form on the domain (or on each B-spline patch) is not
-/// finite or so large that subdividing it in double would overflow (1e308 * x^2 + ...).
+/// Refuses equations whose Bernstein form on the domain (or on a B-spline patch) is zero (the
+/// equation vanishes there: its zero set fills the region, `x - x`) or, in double, not finite
+/// or so large that subdividing it would overflow (1e308 * x^2 + ...).
 template <class S>
-void checkMagnitude(const Problem& problem, const Box<S>& domain) {
+void checkEquations(const Problem& problem, const Box<S>& domain) {
   constexpr double kLimit = 1e300;
   std::vector<Box<S>> boxes;
   if (problem.roots.empty()) boxes.push_back(domain);
@@ -118,9 +224,16 @@ void checkMagnitude(const Problem& problem, const Box<S>& domain) {
   for (std::size_t i = 0; i < problem.equations.size(); ++i) {
     for (const Box<S>& box : boxes) {
       const Bernstein<S> form = problem.equations[i].template toBernstein<S>(box);
+      bool zero = true;
       for (const S& c : form.coefficients()) {
         using std::abs;
-        if (!(abs(c) <= S(kLimit))) {
+        zero = zero && c == S(0);
+        // Residuals, outputs and the crossing's level are in double in every scalar.
+        if (!std::isfinite(toDouble(c)))
+          throw InputError(problem.path + ": equation " + std::to_string(i + 1) +
+                           " overflows on the domain (a Bernstein coefficient is beyond the "
+                           "range of double): rescale the input");
+        if (std::is_same_v<S, double> && !(abs(c) <= S(kLimit))) {
           std::ostringstream o;
           o << problem.path << ": equation " << i + 1 << " reaches " << toDouble(c)
             << " on the domain (its Bernstein coefficients must stay below " << kLimit
@@ -128,6 +241,11 @@ void checkMagnitude(const Problem& problem, const Box<S>& domain) {
           throw InputError(o.str());
         }
       }
+      if (zero)
+        throw InputError(problem.path + ": equation " + std::to_string(i + 1) +
+                         " vanishes everywhere on " +
+                         (problem.roots.empty() ? "the domain" : "a B-spline patch") +
+                         ": its zero set is a region, not a hypersurface");
     }
   }
 }
@@ -149,7 +267,7 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   const Grid grid = makeGrid(problem, settings);
   const Box<S> domain = toScalarBox<S>(grid.domain);
   const System<S> system(problem);
-  if constexpr (std::is_same_v<S, double>) checkMagnitude<S>(problem, domain);
+  checkEquations<S>(problem, domain);
   if (!problem.roots.empty() && settings.jitter)
     throw InputError(
         problem.path +
@@ -168,21 +286,32 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   const Classification classification = createClassification(settings.classification);
   const Connection connection = createConnection(settings.connection);
 
-  // Alg. 1 (1): ZeroSetSubdiv: the solution cells of the final depth.
+  // Alg. 1 (1): ZeroSetSubdiv at a depth, with a budget of solution cells.
+  const auto subdivideAt = [&](const Grid& at, std::int64_t maxCells, const Progress& report) {
+    return bounding ? subdivide<S>(*bounding, subdivision, at, report, maxCells)
+                    : subdividePatches<S>(problem, settings, subdivision, at, report, maxCells);
+  };
+  const MemoryPlan plan = planMemory(problem, settings, grid, [&](const Grid& at) {
+    return subdivideAt(at, cellBudget(problem, at.depth), Progress{}).size();
+  });
+  summary.memoryBudget = plan.budget;
+
+  // The solution cells of the final depth.
   auto t = Clock::now();
+  const std::int64_t maxCells = std::min(cellBudget(problem, settings.depth), plan.maxCells);
   const SolutionCells cells = [&] {
     try {
-      return bounding ? subdivide<S>(*bounding, subdivision, grid, progress,
-                                     cellBudget(problem, settings))
-                      : subdividePatches<S>(problem, settings, subdivision, grid, progress);
-    } catch (const CellBudgetExceeded& e) {
-      throw InputError(problem.path + ": " + e.what() + " (2^(k L + n + 6) with k = " +
-                       std::to_string(problem.k()) + ", L = " + std::to_string(settings.depth) +
-                       "): the zero set is not a " + std::to_string(problem.k()) +
-                       "-manifold (an equation that vanishes on a region, such as x - x, or "
-                       "equations that depend on each other)");
+      return subdivideAt(grid, maxCells, progress);
+    } catch (const CellBudgetExceeded&) {
+      throw InputError(maxCells < cellBudget(problem, settings.depth)
+                           ? plan.overBudget(problem, settings, maxCells + 1, "more than ")
+                           : notAManifold(problem, settings, maxCells));
     }
   }();
+  // Now the count is known: refuse before the memory-hungry stages what cannot fit.
+  summary.estimatedMemory = plan.bytes(static_cast<std::int64_t>(cells.size()));
+  if (summary.estimatedMemory > plan.budget)
+    throw InputError(plan.overBudget(problem, settings, static_cast<std::int64_t>(cells.size())));
   summary.tSubdivision = secondsSince(t);
   summary.visited = cells.visited;
   summary.solution = static_cast<std::int64_t>(cells.size());
@@ -296,14 +425,6 @@ RunResult runPipeline(const Problem& problem, const Settings& settings, const Pr
         << ") are below the rounding of their coordinates";
       throw InputError(o.str());
     }
-  }
-  // A k-manifold meets about c 2^(k L) cells of the final grid: refuse depths whose cell list
-  // alone would not fit in memory rather than fail after minutes of work.
-  if (problem.k() * settings.depth > 26) {
-    throw InputError(problem.path + ": depth " + std::to_string(settings.depth) +
-                     " is beyond what memory allows for k = " + std::to_string(problem.k()) +
-                     " (about 2^" + std::to_string(problem.k() * settings.depth) +
-                     " solution cells; use k * depth <= 26)");
   }
   if (settings.scalar == "double") return run<double>(problem, settings, progress);
   if (settings.scalar == "mpfr") {

@@ -3,6 +3,7 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -205,6 +206,16 @@ class Validator : public TomlReader {
         if (degrees[j] > kMaxDegree)
           fail(node, what + " has degree " + std::to_string(degrees[j]) + " in '" + variables[j] +
                          "'; at most " + std::to_string(kMaxDegree) + " is supported");
+      }
+      // Halving a box costs about (coefficients x degree) operations per equation along an axis
+      // (de Casteljau), and a run halves thousands of boxes: bound the time as well as memory.
+      const double work = coefficients * *std::max_element(degrees.begin(), degrees.end());
+      if (work > kMaxSubdivisionWork) {
+        std::ostringstream message;
+        message << what << " costs about " << work << " operations per subdivision step ("
+                << coefficients << " Bernstein coefficients times its largest degree); at most "
+                << kMaxSubdivisionWork << " are supported";
+        fail(node, message.str());
       }
       return e;
     } catch (const ExpressionError& error) {

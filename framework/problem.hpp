@@ -68,6 +68,11 @@ inline constexpr double kMaxCoefficients = 1e6;
 /// degree-d power costs about d^2 operations per coefficient, so past this a file could keep
 /// the tool busy for hours within the coefficient cap (x^10000, a product of 20,000 factors).
 inline constexpr int kMaxDegree = 1000;
+/// The largest cost of halving an equation's Bernstein form along one axis (its coefficients
+/// times its largest degree, about 10 ms): within the caps above, `(x*y)^500 - z` would cost
+/// 1.3e8 operations per box, hours for a run of thousands of boxes. The examples need at most
+/// 3e4.
+inline constexpr double kMaxSubdivisionWork = 1e7;
 
 /// Whether `s` is a valid problem or experiment name: `[a-z0-9._-]+` (it names files and
 /// result folders).

@@ -20,6 +20,11 @@ struct Settings {
   std::string classification = "paper";
   std::string connection = "crossing";
   std::optional<std::uint64_t> jitter;
+  /// Memory the run may use, in bytes (`--max-memory`); 0: ndc::defaultMemoryBudget().
+  std::uint64_t maxMemoryBytes = 0;
+  /// Wall-clock limit of the whole solve in seconds (`--timeout`; the CLI enforces it); unset:
+  /// none.
+  std::optional<double> timeoutSeconds;
 };
 
 /// Mesh statistics after welding identical vertices (`mesh` in summary.json).
@@ -87,6 +92,9 @@ struct Summary {
   std::string singularName;
   std::int64_t imageSingularVertices = 0;
   double tSubdivision = 0, tProjection = 0, tConnection = 0, tAnalysis = 0, tTotal = 0;
+  /// The memory budget of the run in bytes (`budget.max_memory_bytes`), and the memory the run
+  /// was estimated to need before the projection (`budget.estimated_memory_bytes`).
+  double memoryBudget = 0, estimatedMemory = 0;
 };
 
 /// summary.json text (schema "ndcontour.summary/1"), field names exactly as design.md 4.3.

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -114,9 +115,9 @@ TEST_CASE("hostile: numeric edges are results or refusals naming the file", "[cl
                        "domain = [[-1, 1], [-1, 1], [-1, 1], [-1, 1]]\n"
                        "equations = [\"x^2 + y^2 + z^2 + w^2 - 0.5\"]\n";
   refused("solve --depth 3", k3, "k = 3");
-  // A zero set that fills the domain (x - x vanishes everywhere): stopped by the cell budget
-  // with a message that says why, not 2^20 cells and an empty mesh.
-  refused("solve --depth 10", problem("everywhere", "x - x + 0*y"), "is not a 1-manifold");
+  // An equation that vanishes everywhere (x - x): its zero set is the domain, refused before
+  // any work, not 2^24 cells and an empty mesh.
+  refused("solve --depth 12", problem("everywhere", "x - x + 0*y"), "vanishes everywhere");
   // Coefficients that overflow double arithmetic.
   refused("solve --depth 4", problem("huge", "1e308*x^2 + 1e308*y^2 - 1e308"), "rescale");
 }
@@ -187,4 +188,73 @@ TEST_CASE("hostile: bytes that are not UTF-8 text, and endless files, are refuse
   CHECK(fine.status == 0);
   // /dev/zero would be read without bound: refused at 16 MiB.
   refused("info", "/dev/zero", "larger than 16 MiB");
+}
+
+TEST_CASE("hostile: budgets refuse what cannot fit, before the work", "[cli][hostile]") {
+  const std::string torus = ndc::test::quoted(
+      (fs::path(ndc::test::sourceDir()) / "experiments" / "problems" / "torus.toml").string());
+  // The torus at depth 12 needs tens of GiB: refused from a trial at a coarse depth, at once
+  // (it once ran 18 minutes into std::bad_alloc). Depth 21, the deepest a 3-variable cell
+  // index holds, likewise.
+  for (const char* depth : {"12", "21"}) {
+    const Run run = ndcontour("solve --depth " + std::string(depth) + " " + torus);
+    INFO(run.err);
+    CHECK(run.status == 2);
+    CHECK(contains(run.err, "torus.toml: depth " + std::string(depth) + " needs about"));
+    CHECK(contains(run.err, "estimated from"));
+    CHECK(contains(run.err, "75% of this machine's memory"));
+  }
+  // An explicit budget: depth 7 (about 88,000 solution cells) does not fit 30 MiB, depth 4 does,
+  // and the summary records the budget.
+  refused("solve --depth 7 --max-memory 30M",
+          fs::path(ndc::test::sourceDir()) / "experiments" / "problems" / "torus.toml",
+          "over the budget of 30.0 MiB");
+  const Run fits = ndcontour("solve --depth 4 --max-memory 64M --json " + torus);
+  INFO(fits.err);
+  CHECK(fits.status == 0);
+  CHECK(contains(fits.out, "\"budget\": {\"max_memory_bytes\": 67108864"));
+  CHECK(contains(fits.out, "\"timeout_s\": null"));
+  // Two equations that depend on each other in R^3: a cylinder where k says a curve. The
+  // solution cells grow like 2^(2 L), past the budget of a 1-manifold.
+  const fs::path dependent = scratch() / "dependent.toml";
+  std::ofstream(dependent) << "name = \"dependent\"\nvariables = [\"x\", \"y\", \"z\"]\n"
+                              "domain = [[-2, 2], [-2, 2], [-2, 2]]\n"
+                              "equations = [\"x^2 + y^2 - 1\", \"2*x^2 + 2*y^2 - 2\"]\n";
+  refused("solve --depth 9", dependent, "is not a 1-manifold");
+  // Bad budgets are usage errors, before any work.
+  for (const char* bad : {"--max-memory 0", "--max-memory 12X", "--max-memory 1K",
+                          "--max-memory -5G", "--timeout 0", "--timeout -1", "--timeout nan"}) {
+    const Run run = ndcontour("solve " + std::string(bad) + " " + torus);
+    INFO(bad << ": " << run.err);
+    CHECK(run.status == 2);
+    CHECK(std::count(run.err.begin(), run.err.end(), '\n') == 1);
+  }
+}
+
+TEST_CASE("hostile: --timeout stops a solve and keeps the previous run whole", "[cli][hostile]") {
+  const fs::path out = scratch() / "timed-out";
+  const std::string circle = ndc::test::quoted(problem("timed", "x^2 + y^2 - 1").string());
+  REQUIRE(
+      ndcontour("solve " + circle + " --depth 4 --out " + ndc::test::quoted(out.string())).status ==
+      0);
+  const std::string summary = ndc::test::slurp(out / "summary.json");
+  const std::string torus = ndc::test::quoted(
+      (fs::path(ndc::test::sourceDir()) / "experiments" / "problems" / "torus-r6.toml").string());
+  const auto start = std::chrono::steady_clock::now();
+  const Run run = ndcontour("solve " + torus + " --depth 6 --timeout 1 --out " +
+                            ndc::test::quoted(out.string()));
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  INFO(run.err);
+  CHECK(run.status == 124);
+  CHECK(seconds < 5);
+  CHECK(contains(run.err, "torus-r6.toml: stopped by --timeout after 1 s"));
+  CHECK(contains(run.err, "keeps its previous run"));
+  CHECK(ndc::test::slurp(out / "summary.json") == summary);
+  for (const auto& entry : fs::directory_iterator(out))
+    CHECK(entry.path().filename().string().rfind(".ndcontour-partial", 0) != 0);
+  // A run that finishes within its limit is a normal run and records the limit.
+  const Run quick = ndcontour("solve " + circle + " --depth 4 --timeout 60 --json");
+  CHECK(quick.status == 0);
+  CHECK(contains(quick.out, "\"timeout_s\": 60"));
 }

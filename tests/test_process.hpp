@@ -55,11 +55,15 @@ struct CliRun {
 };
 
 /// Runs `ndcontour ARGS` (ARGS already shell-quoted) with stdin from /dev/null, capturing
-/// stdout and stderr through files in `scratch`.
-inline CliRun runNdcontour(const std::string& args, const std::filesystem::path& scratch) {
+/// stdout and stderr through files in `scratch`. With `limitSeconds` > 0 the run is killed
+/// (SIGKILL, status 137) when it takes longer.
+inline CliRun runNdcontour(const std::string& args, const std::filesystem::path& scratch,
+                           int limitSeconds = 0) {
   const auto out = scratch / "stdout.txt", err = scratch / "stderr.txt";
-  const std::string command = quoted(binaryPath()) + " " + args + " >" + quoted(out.string()) +
-                              " 2>" + quoted(err.string()) + " </dev/null";
+  const std::string limit =
+      limitSeconds > 0 ? "timeout -s KILL " + std::to_string(limitSeconds) + " " : "";
+  const std::string command = limit + quoted(binaryPath()) + " " + args + " >" +
+                              quoted(out.string()) + " 2>" + quoted(err.string()) + " </dev/null";
   const int raw = std::system(command.c_str());
   CliRun run;
   run.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;

@@ -1,5 +1,6 @@
 // Application problem files (paper Sec. 3): the common tables ([[surfaces]], [motion], eye,
 // alpha) are read and validated here; the application's builder then forms its system.
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -30,6 +31,10 @@ struct Reader {
     if (a.size() != 2) r.fail(node, what + " must be [lo, hi]");
     const double lo = r.numberOf(a[0], what + ": lo"), hi = r.numberOf(a[1], what + ": hi");
     if (!(lo < hi)) r.fail(node, what + " is empty or inverted: lo must be less than hi");
+    // The same rule as a problem's domain: a width that overflows has no cells.
+    if (!std::isfinite(hi - lo))
+      r.fail(node, what + " is too wide: hi - lo = " + TomlReader::format(hi) + " - " +
+                       TomlReader::format(lo) + " overflows a double");
     return {lo, hi};
   }
 
@@ -127,6 +132,13 @@ struct Reader {
           s.weights.push_back(v);
         }
       }
+      // A rational surface is unchanged when all its weights are scaled alike: scale them by a
+      // power of two (exact) so the largest lies in [1, 2), or weights near 1e-300 underflow to 0 in the
+      // products the equations are built from and the run solves garbage.
+      const double largest = *std::max_element(s.weights.begin(), s.weights.end());
+      int exponent = 0;
+      std::frexp(largest, &exponent);
+      for (double& weight : s.weights) weight = std::ldexp(weight, 1 - exponent);
     }
     return s;
   }

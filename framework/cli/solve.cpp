@@ -7,10 +7,12 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <new>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "budget.hpp"
 #include "cli/commands.hpp"
 #include "expectation.hpp"
 #include "io.hpp"
@@ -118,13 +120,41 @@ void printDiagnostics(const Summary& s) {
   }
 }
 
+/// The pipeline, with running out of memory (the estimate was low, or the address-space limit
+/// was reached) reported as bad input that names the budget.
+RunResult solveWithin(const Problem& problem, const Settings& settings) {
+  try {
+    return runPipeline(problem, settings, terminalProgress());
+  } catch (const std::bad_alloc&) {
+    const double budget = static_cast<double>(settings.maxMemoryBytes ? settings.maxMemoryBytes
+                                                                      : defaultMemoryBudget());
+    throw InputError(problem.path + ": depth " + std::to_string(settings.depth) +
+                     " ran out of memory (the budget is " + formatBytes(budget) +
+                     "): use a smaller depth, or set --max-memory if the machine has more");
+  }
+}
+
+/// The run's limits: `--timeout` as an alarm that ends the process, and the memory budget as
+/// the address-space limit that turns an underestimate into std::bad_alloc (exit 2, main.cpp).
+void armBudgets(const SolveOptions& options, const Problem& problem) {
+  const Settings& s = options.settings;
+  limitAddressSpace(s.maxMemoryBytes ? s.maxMemoryBytes : defaultMemoryBudget());
+  if (!s.timeoutSeconds) return;
+  std::ostringstream line;
+  line << problem.path << ": stopped by --timeout after " << *s.timeoutSeconds << " s";
+  if (options.outDir) line << " (" << *options.outDir << " keeps its previous run)";
+  armTimeout(*s.timeoutSeconds, line.str(), kExitTimeout);
+}
+
 }  // namespace
 
 int runSolve(SolveOptions options, const Problem& problem) {
   if (options.tolerance) options.settings.depth = depthForTolerance(problem, *options.tolerance);
   if (options.outDir) checkWritable(*options.outDir);
   installInterruptCleanup();
-  RunResult result = runPipeline(problem, options.settings, terminalProgress());
+  armBudgets(options, problem);
+  RunResult result = solveWithin(problem, options.settings);
+  if (!options.outDir) disarmTimeout();
   // design.md 4.5: the mesh against the problem's [expect] (none: no `expect` in the summary).
   result.summary.expect = checkExpectation(problem.expect, result.summary.mesh, result.k);
   const int status =

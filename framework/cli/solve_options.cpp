@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <limits>
 
+#include "budget.hpp"
 #include "grid.hpp"
 
 namespace ndc::cli {
@@ -88,6 +89,16 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
       .add_option("--out", o.outDir,
                   "Write summary.json, mesh.ply, cells.csv and singular.csv to DIR")
       ->type_name("DIR");
+  solve
+      .add_option("--max-memory", o.maxMemory,
+                  "Memory the run may use (K, M, G, T: powers of 1024); a depth that needs more "
+                  "is refused before the work (default: 75% of the machine's memory)")
+      ->type_name("SIZE");
+  solve
+      .add_option("--timeout", s.timeoutSeconds,
+                  "Stop the solve after this many seconds of wall time (exit status " +
+                      std::to_string(kExitTimeout) + "; --out keeps its previous run)")
+      ->type_name("SECONDS");
   solve.add_flag("--json", o.json, "Print the summary (JSON) on standard output, nothing else");
   solve.add_flag("--check", o.check,
                  "Exit with status " + std::to_string(kExitExpectMismatch) +
@@ -122,6 +133,15 @@ void validateSolveOptions(SolveOptions& o) {
 
   if (o.tolerance && !(std::isfinite(*o.tolerance) && *o.tolerance > 0))
     throw UsageError("--tolerance must be a positive finite number");
+  if (s.timeoutSeconds && !(*s.timeoutSeconds > 0 && *s.timeoutSeconds <= kMaxTimeoutSeconds))
+    throw UsageError("--timeout must be a positive number of seconds, at most a year");
+  if (!o.maxMemory.empty()) {
+    const auto bytes = parseByteSize(o.maxMemory);
+    if (!bytes)
+      throw UsageError("--max-memory '" + o.maxMemory +
+                       "' is not a size between 1M and 1048576T (a number with K, M, G or T)");
+    s.maxMemoryBytes = *bytes;
+  }
 
   // An existing output must be a directory; the pipeline decides what it may overwrite.
   if (o.outDir) {

@@ -51,7 +51,8 @@ struct SolveOptions {
   std::optional<double> tolerance;    ///< `--tolerance h`: unset lets the pipeline choose
   /// `--out DIR`: write summary.json, mesh.ply, cells.csv, singular.csv
   std::optional<std::string> outDir;
-  bool json = false;  ///< `--json`: the summary on standard output, nothing else
+  bool json = false;      ///< `--json`: the summary on standard output, nothing else
+  std::string maxMemory;  ///< `--max-memory SIZE` as given (parsed into settings)
   /// `--check`: exit with kExitExpectMismatch when the mesh differs from the problem's `[expect]`.
   bool check = false;
 };
@@ -60,12 +61,17 @@ struct SolveOptions {
 /// internal error, bad input or usage (one line on standard error), and `solve --check` finding
 /// the mesh different from the problem's `[expect]`.
 inline constexpr int kExitOk = 0, kExitInternal = 1, kExitBadInput = 2, kExitExpectMismatch = 3;
+/// `solve --timeout` reached (the convention of timeout(1)); nothing in `--out` is touched.
+inline constexpr int kExitTimeout = 124;
+/// The longest `--timeout`: a year.
+inline constexpr double kMaxTimeoutSeconds = 365.0 * 24 * 3600;
 
 /// The exit statuses as the help text lists them.
 inline constexpr const char* kExitStatusHelp =
     "Exit status: 0 success (a mismatch with [expect] is only a warning without --check), 1 "
     "internal error, 2 bad input or usage (one line on standard error naming the file), 3 "
-    "solve --check: the mesh differs from the problem's [expect].";
+    "solve --check: the mesh differs from the problem's [expect], 124 solve --timeout reached, "
+    "130 and 143 interrupted by SIGINT and SIGTERM (an --out folder keeps its previous run).";
 
 /// A CLI11 check that accepts a decimal integer in [0, max] (CLI11 alone would wrap "-3" or an
 /// overflow silently), for `--jitter` of `solve` and `bench`.

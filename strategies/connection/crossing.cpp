@@ -57,6 +57,7 @@ class FaceSolver {
     point_ = std::move(point);
     free_ = std::move(freeAxes);
     certain_ = true;
+    boxes_ = 0;
     if (m_ == 1) {
       edge(patches.front().domain(), roots);
       return true;
@@ -97,8 +98,11 @@ class FaceSolver {
       roots.push_back(fullPoint(y));
       return;
     }
-    if (depth >= maxDepth_ * m_) {
-      // Undecided at the smallest face size: keep Newton's root, flag the face uncertain.
+    // Undecided at the smallest face size, or after the face's budget of boxes (where F = c
+    // has a continuum of roots on the face, as on a degenerate surface patch, the recursion
+    // would otherwise visit up to 2^(maxDepth m) boxes): keep Newton's root, flag the face
+    // uncertain.
+    if (depth >= maxDepth_ * m_ || ++boxes_ > kMaxBoxes) {
       certain_ = false;
       if (found) roots.push_back(fullPoint(root));
       return;
@@ -360,6 +364,10 @@ class FaceSolver {
   std::vector<S> f_, jacobian_;
   std::vector<Interval<S>> jx_;
   bool certain_ = true;
+  /// Boxes of the current face subdivided so far, and the most one face may take: an isolated
+  /// root needs about 2 maxDepth m boxes, a fold a few times that.
+  long boxes_ = 0;
+  static constexpr long kMaxBoxes = 4096;
 };
 
 /// The m x n Jacobian of the system at x.
