@@ -99,7 +99,7 @@ inline constexpr std::array<std::string_view, 22> kExperimentRunColumns = {
 /// with dotted names. Numeric fields a later summary schema adds come after these, sorted by
 /// name; list elements (singular points, the perturbation level) and `expect` (see
 /// `expect_ok`) are left out.
-inline constexpr std::array<std::string_view, 28> kExperimentSummaryColumns = {
+inline constexpr std::array<std::string_view, 31> kExperimentSummaryColumns = {
     "cells.visited",
     "cells.solution",
     "cells.normal",
@@ -127,7 +127,10 @@ inline constexpr std::array<std::string_view, 28> kExperimentSummaryColumns = {
     "diagnostics.off_manifold_vertices",
     "diagnostics.perturbation.attempts",
     "diagnostics.perturbation.degenerate_crossings",
-    "mesh.boundary_components"};
+    "mesh.boundary_components",
+    "budget.max_memory_bytes",
+    "budget.estimated_memory_bytes",
+    "budget.timeout_s"};
 
 /// The numeric fields of a JSON document (numbers and null), in document order, named by
 /// their dotted paths (`cells.visited`); the number text is kept as written, null is "".

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -149,7 +150,8 @@ const std::string kHeader =
     "diagnostics.singular_cells,diagnostics.chord_failures,timing_s.subdivision,"
     "timing_s.projection,timing_s.connection,timing_s.analysis,timing_s.total,"
     "diagnostics.off_manifold_vertices,diagnostics.perturbation.attempts,"
-    "diagnostics.perturbation.degenerate_crossings,mesh.boundary_components";
+    "diagnostics.perturbation.degenerate_crossings,mesh.boundary_components,"
+    "budget.max_memory_bytes,budget.estimated_memory_bytes,budget.timeout_s";
 
 const std::string kTiny =
     "id = \"tiny\"\nartefact = \"table\"\ndescription = \"a tiny grid\"\n"
@@ -428,8 +430,8 @@ TEST_CASE("experiment: failed and timed-out runs are recorded and reported, neve
   CHECK(records[1].at("status") == "ok");
   CHECK(!records[1].at("cells.visited").empty());
   // The failure is kept in the run directory and in the provenance.
-  CHECK(
-      contains(slurp(out / "failing" / "runs" / records[0].at("run") / "stderr.txt"), "--max-memory"));
+  CHECK(contains(slurp(out / "failing" / "runs" / records[0].at("run") / "stderr.txt"),
+                 "--max-memory"));
   CHECK(contains(slurp(out / "failing" / "provenance.json"), "\"failed\": 1"));
   // A failed run is not finished: the next invocation tries it again.
   const Run again = experiment(failing, out);
@@ -687,4 +689,33 @@ TEST_CASE("experiment: a run killed by a signal is recorded as crashed", "[exper
   CHECK(records[0].at("mesh.components").empty());
   CHECK(records[1].at("status") == "ok");
   CHECK(records[1].at("mesh.components") == "1");
+}
+
+TEST_CASE("experiment: SIGTERM stops the runner and its children, and keeps finished runs",
+          "[experiment]") {
+  // A quick run and a slow one (torus-r6 at depth 6 takes tens of seconds), both at once.
+  const fs::path config = writeConfig(
+      "stopped", "id = \"stopped\"\nartefact = \"table\"\ndescription = \"d\"\nproblems = [\"" +
+                     example("circle") + "\", \"" + example("torus-r6") + "\"]\ndepths = [6]\n");
+  const fs::path out = scratch() / "stopped-out";
+  fs::remove_all(out);
+  const auto start = std::chrono::steady_clock::now();
+  const std::string command =
+      "timeout --preserve-status -s TERM 2 " + quoted(ndc::test::binaryPath()) + " experiment " +
+      quoted(config.string()) + " --jobs 2 --out " + quoted(out.string()) + " >/dev/null 2>&1";
+  const int raw = std::system(command.c_str());
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  CHECK((WIFEXITED(raw) && WEXITSTATUS(raw) == 143));
+  CHECK(seconds < 5);  // 2 s, then at most a second for the children
+  // The circle finished and keeps its summary; the torus did not, and left no staging folder.
+  int finished = 0;
+  for (const auto& run : fs::directory_iterator(out / "stopped" / "runs")) {
+    finished += fs::exists(run.path() / "summary.json");
+    for (const auto& entry : fs::directory_iterator(run.path()))
+      CHECK(entry.path().filename().string().rfind(".ndcontour-partial", 0) != 0);
+  }
+  CHECK(finished == 1);
+  // No CSV is written by an interrupted invocation; the next one resumes.
+  CHECK(!fs::exists(out / "stopped" / "stopped.csv"));
 }
