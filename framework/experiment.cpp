@@ -539,7 +539,7 @@ class ConfigReader {
 ExperimentConfig loadExperimentConfig(const fs::path& file, bool quick) {
   const std::string name = file.string();
   const std::string text = readInputFile(file, "experiment config");
-  checkTextEncoding(text, name);
+  checkTomlText(text, name);
   toml::table top;
   try {
     top = toml::parse(text, std::string_view(name));

@@ -438,8 +438,71 @@ std::string readInputFile(const std::filesystem::path& file, const std::string& 
   return text;
 }
 
-Problem parseProblem(const std::string& text, const std::string& file) {
+void checkKeyNesting(const std::string& text, const std::string& file) {
+  enum class State { kCode, kComment, kBasic, kLiteral, kMultiBasic, kMultiLiteral };
+  State state = State::kCode;
+  int line = 1, column = 0, dots = 0;
+  const auto at = [&](std::size_t i, const char* s) { return text.compare(i, 3, s) == 0; };
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+      column = 0;
+    } else if ((static_cast<unsigned char>(c) & 0xC0) != 0x80) {
+      ++column;  // a character, not a UTF-8 continuation byte
+    }
+    switch (state) {
+      case State::kComment:
+        if (c == '\n') state = State::kCode;
+        break;
+      case State::kBasic:
+        if (c == '\\') ++i;
+        if (c == '"' || c == '\n') state = State::kCode;
+        break;
+      case State::kLiteral:
+        if (c == '\'' || c == '\n') state = State::kCode;
+        break;
+      case State::kMultiBasic:
+        if (c == '\\') ++i;
+        if (at(i, "\"\"\"")) state = State::kCode, i += 2;
+        break;
+      case State::kMultiLiteral:
+        if (at(i, "'''")) state = State::kCode, i += 2;
+        break;
+      case State::kCode:
+        // A chain of bare or quoted keys joined by dots is one dotted key: count its dots. A
+        // value has at most one dot outside strings (1.5); anything else ends the chain.
+        if (c == '.') {
+          if (++dots > kMaxKeyDots)
+            throw InputError::at(file, line, column,
+                                 "key nested too deeply: more than " + std::to_string(kMaxKeyDots) +
+                                     " dotted parts");
+        } else if (at(i, "\"\"\"")) {
+          state = State::kMultiBasic, i += 2;
+        } else if (at(i, "'''")) {
+          state = State::kMultiLiteral, i += 2;
+        } else if (c == '"') {
+          state = State::kBasic;
+        } else if (c == '\'') {
+          state = State::kLiteral;
+        } else if (c == '#') {
+          state = State::kComment, dots = 0;
+        } else if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' ||
+                     c == ' ' || c == '\t')) {
+          dots = 0;
+        }
+        break;
+    }
+  }
+}
+
+void checkTomlText(const std::string& text, const std::string& file) {
   checkTextEncoding(text, file);
+  checkKeyNesting(text, file);
+}
+
+Problem parseProblem(const std::string& text, const std::string& file) {
+  checkTomlText(text, file);
   toml::table root;
   try {
     root = toml::parse(text, std::string_view(file));

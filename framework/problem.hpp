@@ -92,6 +92,19 @@ std::string readInputFile(const std::filesystem::path& file, const std::string& 
 /// sees the text, and echoes no offending byte.
 void checkTextEncoding(const std::string& text, const std::string& file);
 
+/// The most dotted parts a TOML key may have (`a.b.c = 1` has 2): toml++ builds one nested
+/// table per part recursively, and 50,000 of them overflowed the stack.
+inline constexpr int kMaxKeyDots = 64;
+
+/// Throws InputError at the line and column of the first dot past kMaxKeyDots in a dotted key
+/// or table header (dots inside strings and comments do not count). Run before the TOML parser
+/// sees the text.
+void checkKeyNesting(const std::string& text, const std::string& file);
+
+/// Everything checked before the TOML parser sees a file's text: checkTextEncoding, then
+/// checkKeyNesting.
+void checkTomlText(const std::string& text, const std::string& file);
+
 /// Reads and validates a problem file; throws InputError.
 Problem loadProblem(const std::filesystem::path& file);
 /// Parses and validates problem text (`file` is used in messages); throws InputError.

@@ -74,6 +74,20 @@ TEST_CASE("hostile: deep nesting is refused with a position, not a stack overflo
     refused(command, minus, "nested too deeply");
     refused(command, exponent, "nested too deeply");
   }
+  // TOML keys with 50,000 dotted parts (a key, a table header, a key in an inline table): toml++
+  // nests a table per part recursively and overflowed the stack.
+  const std::string head =
+      "name = \"p\"\nvariables = [\"x\", \"y\"]\ndomain = [[-2, 2], [-2, 2]]\n"
+      "equations = [\"x^2 + y^2 - 1\"]\n";
+  const std::string chain = repeat("a.", 50000) + "b";
+  int i = 0;
+  for (const std::string& tail :
+       {chain + " = 1\n", "[" + chain + "]\n", "z = {" + chain + " = 1}\n"}) {
+    const fs::path file = scratch() / ("dotted" + std::to_string(i++) + ".toml");
+    std::ofstream(file) << head << tail;
+    refused("info", file, "key nested too deeply");
+    refused("info", file, file.string() + ":5:");
+  }
   // 200 levels are allowed (the limit is documented), and solve.
   const fs::path fine = problem("fine", repeat("(", 150) + "x^2 + y^2 - 1" + repeat(")", 150));
   const Run run = ndcontour("solve --depth 4 " + ndc::test::quoted(fine.string()));
