@@ -222,8 +222,11 @@ Problem buildApplication(const toml::table& root, TomlReader& reader) {
     Problem p;
     try {
       p = entry.build(in);
-    } catch (const InputError&) {
-      throw;
+    } catch (const InputError& error) {
+      // Messages from the geometry (knots off the dyadic grid, too many B-spline patches) do
+      // not know the file: name it.
+      if (std::string(error.what()).rfind(reader.file(), 0) == 0) throw;
+      in.fail(error.what());
     } catch (const std::exception& error) {
       in.fail(error.what());
     }

@@ -166,31 +166,40 @@ std::array<double, 2> SurfaceSpec::range(int d) const {
   return {knots[p], knots[count]};
 }
 
-std::array<double, 3> SurfaceSpec::evaluate(double u, double v) const {
-  // Locate the Bezier piece and evaluate it (extraction is cheap for the sizes used here).
-  const Extracted e = extractSurface(*this);
+namespace {
+
+/// The surface point at (u, v) from its Bezier pieces `e`: locate the piece, then de Casteljau.
+std::array<double, 3> evaluateExtracted(const SurfaceSpec& s, const Extracted& e, double u,
+                                        double v) {
   const auto locate = [&](int d, double x, int spans, double& local) {
-    const auto& knots = d == 0 ? knotsU : knotsV;
+    const auto& knots = d == 0 ? s.knotsU : s.knotsV;
     if (knots.empty()) {
-      local = (x - box[2 * d]) / (box[2 * d + 1] - box[2 * d]);
+      local = (x - s.box[2 * d]) / (s.box[2 * d + 1] - s.box[2 * d]);
       return 0;
     }
-    const std::vector<double> distinct = distinctKnots(*this, d);
-    int s = 0;
-    while (s + 1 < spans && x >= distinct[s + 1]) ++s;
-    local = (x - distinct[s]) / (distinct[s + 1] - distinct[s]);
-    return s;
+    const std::vector<double> distinct = distinctKnots(s, d);
+    int span = 0;
+    while (span + 1 < spans && x >= distinct[span + 1]) ++span;
+    local = (x - distinct[span]) / (distinct[span + 1] - distinct[span]);
+    return span;
   };
   double lu, lv;
   const int su = locate(0, u, e.spansU, lu), sv = locate(1, v, e.spansV, lv);
   const auto& net = e.nets[sv * e.spansU + su];
   std::vector<Vec4> column;
-  for (int j = 0; j <= degreeV; ++j) {
-    std::vector<Vec4> row(net.begin() + j * (degreeU + 1), net.begin() + (j + 1) * (degreeU + 1));
+  for (int j = 0; j <= s.degreeV; ++j) {
+    std::vector<Vec4> row(net.begin() + j * (s.degreeU + 1),
+                          net.begin() + (j + 1) * (s.degreeU + 1));
     column.push_back(deCasteljau(row, lu));
   }
   const Vec4 h = deCasteljau(column, lv);
   return {h[0] / h[3], h[1] / h[3], h[2] / h[3]};
+}
+
+}  // namespace
+
+std::array<double, 3> SurfaceSpec::evaluate(double u, double v) const {
+  return evaluateExtracted(*this, extractSurface(*this), u, v);
 }
 
 std::vector<double> distinctKnots(const SurfaceSpec& spec, int d) {
@@ -347,9 +356,12 @@ void tessellate(const SurfaceSpec& spec, int part, int k, TriangleSoup& input,
                 const MotionSpec* motion, double t) {
   const auto ru = spec.range(0), rv = spec.range(1);
   const int base = static_cast<int>(input.vertices.size());
+  // Extract the Bezier pieces once, not per point: a 64 x 64 net of degree 12 took minutes.
+  const Extracted pieces = extractSurface(spec);
   for (int j = 0; j <= k; ++j)
     for (int i = 0; i <= k; ++i) {
-      auto x = spec.evaluate(ru[0] + (ru[1] - ru[0]) * i / k, rv[0] + (rv[1] - rv[0]) * j / k);
+      auto x = evaluateExtracted(spec, pieces, ru[0] + (ru[1] - ru[0]) * i / k,
+                                 rv[0] + (rv[1] - rv[0]) * j / k);
       if (motion) x = motion->apply(t, x);
       input.vertices.push_back(x);
     }
