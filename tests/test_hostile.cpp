@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -271,4 +272,29 @@ TEST_CASE("hostile: --timeout stops a solve and keeps the previous run whole", "
   const Run quick = ndcontour("solve " + circle + " --depth 4 --timeout 60 --json");
   CHECK(quick.status == 0);
   CHECK(contains(quick.out, "\"timeout_s\": 60"));
+}
+
+TEST_CASE("hostile: large and degenerate application surfaces", "[cli][hostile]") {
+  // A 64 x 64 B-spline net of degree 12: the input tessellation once extracted the Bezier
+  // pieces anew for every point (minutes in `info`); now its patch boxes are refused at once.
+  std::ostringstream big;
+  big << "name = \"big\"\napplication = \"convex-hull\"\n[[surfaces]]\ndegree = [12, 12]\n"
+         "points = [";
+  for (int j = 0; j < 64; ++j) {
+    big << (j ? ",\n" : "\n") << "[";
+    for (int i = 0; i < 64; ++i)
+      big << (i ? ", " : "") << "[" << i / 63.0 << ", " << j / 63.0 << ", " << 0.01 * ((i * j) % 7)
+          << "]";
+    big << "]";
+  }
+  std::string knots = "[";
+  for (int i = 0; i < 77; ++i) knots += (i ? ", " : "") + std::to_string(std::clamp(i - 12, 0, 52));
+  knots += "]";
+  big << "]\nknots_u = " << knots << "\nknots_v = " << knots
+      << "\n[[surfaces]]\npoints = [[[0, 0, 2], [1, 0, 2]], [[0, 1, 2], [1, 1, 2.5]]]\n";
+  const fs::path file = scratch() / "big-bspline.toml";
+  std::ofstream(file) << big.str();
+  const auto start = std::chrono::steady_clock::now();
+  refused("info", file, "root boxes");
+  CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < 10);
 }
