@@ -212,18 +212,54 @@ SolutionCells subdividePatches(const Problem& problem, const Settings& settings,
   return cells;
 }
 
+/// The largest error of a double Bernstein form of `e` on `box`, relative to the largest
+/// coefficient, against the same form computed in 256-bit MPFR (from the exact decimal
+/// literals): cancellation such as `(x + 1e16)^2 - 1e32 - 2e16*x` leaves nothing of x^2 in double.
+double precisionLoss(const Expression& e, const Box<double>& box, const Bernstein<double>& form) {
+  struct Restore {
+    unsigned bits = mpfrPrecision();
+    ~Restore() { setMpfrPrecision(bits); }
+  } restore;
+  setMpfrPrecision(256);
+  const Bernstein<Mpfr> exact = e.toBernstein<Mpfr>(toScalarBox<Mpfr>(box));
+  double largest = 0, error = 0;
+  for (std::size_t j = 0; j < exact.coefficients().size(); ++j) {
+    const Mpfr& c = exact.coefficients()[j];
+    largest = std::max(largest, std::abs(toDouble(c)));
+    error = std::max(error, std::abs(toDouble(Mpfr(form.coefficients()[j]) - c)));
+  }
+  if (largest == 0) return error > 0 ? std::numeric_limits<double>::infinity() : 0;
+  return error / largest;
+}
+
 /// Refuses equations whose Bernstein form on the domain (or on a B-spline patch) is zero (the
-/// equation vanishes there: its zero set fills the region, `x - x`) or, in double, not finite
-/// or so large that subdividing it would overflow (1e308 * x^2 + ...).
+/// equation vanishes there: its zero set fills the region, `x - x`), not finite in double, or,
+/// in a double run, so large that subdividing it would overflow (1e308 * x^2 + ...) or so
+/// inexact that its zero set is noise (precisionLoss above 1e-6, checked on the first 8 boxes).
 template <class S>
 void checkEquations(const Problem& problem, const Box<S>& domain) {
+  constexpr double kMaxPrecisionLoss = 1e-6;
+  constexpr std::size_t kPrecisionBoxes = 8;
   constexpr double kLimit = 1e300;
   std::vector<Box<S>> boxes;
   if (problem.roots.empty()) boxes.push_back(domain);
   for (const Box<double>& patch : problem.roots) boxes.push_back(toScalarBox<S>(patch));
   for (std::size_t i = 0; i < problem.equations.size(); ++i) {
-    for (const Box<S>& box : boxes) {
+    for (std::size_t b = 0; b < boxes.size(); ++b) {
+      const Box<S>& box = boxes[b];
       const Bernstein<S> form = problem.equations[i].template toBernstein<S>(box);
+      if constexpr (std::is_same_v<S, double>) {
+        const double loss =
+            b < kPrecisionBoxes ? precisionLoss(problem.equations[i], box, form) : 0.0;
+        if (loss > kMaxPrecisionLoss) {
+          std::ostringstream o;
+          o << problem.path << ": equation " << i + 1 << " loses its precision in double "
+            << "arithmetic (its Bernstein coefficients are off by " << loss
+            << " of the largest, against 256-bit arithmetic): use --scalar mpfr, or expand and "
+            << "simplify it";
+          throw InputError(o.str());
+        }
+      }
       bool zero = true;
       for (const S& c : form.coefficients()) {
         using std::abs;
