@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -297,4 +298,36 @@ TEST_CASE("hostile: large and degenerate application surfaces", "[cli][hostile]"
   const auto start = std::chrono::steady_clock::now();
   refused("info", file, "root boxes");
   CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < 10);
+}
+
+TEST_CASE("hostile: a write that fails (a full disk) leaves the previous run whole",
+          "[cli][hostile]") {
+  const fs::path out = scratch() / "full-disk";
+  const std::string circle = ndc::test::quoted(problem("small", "x^2 + y^2 - 1").string());
+  REQUIRE(
+      ndcontour("solve " + circle + " --depth 4 --out " + ndc::test::quoted(out.string())).status ==
+      0);
+  std::map<std::string, std::string> before;
+  for (const auto& entry : fs::directory_iterator(out))
+    before[entry.path().filename().string()] = ndc::test::slurp(entry.path());
+  // A file size limit of 100 KiB (SIGXFSZ ignored, so a write past it fails with EFBIG as on a
+  // full disk) while the torus at depth 6 writes megabytes.
+  const std::string torus = ndc::test::quoted(
+      (fs::path(ndc::test::sourceDir()) / "experiments" / "problems" / "torus.toml").string());
+  const std::string command =
+      "sh -c " +
+      ndc::test::quoted("trap '' XFSZ; ulimit -f 200; " +
+                        ndc::test::quoted(ndc::test::binaryPath()) + " solve " + torus +
+                        " --depth 6 --out " + ndc::test::quoted(out.string())) +
+      " >/dev/null 2>" + ndc::test::quoted((scratch() / "err.txt").string());
+  const int raw = std::system(command.c_str());
+  const std::string err = ndc::test::slurp(scratch() / "err.txt");
+  INFO(err);
+  CHECK((WIFEXITED(raw) && WEXITSTATUS(raw) == 2));
+  CHECK(contains(err, "cannot write the file"));
+  CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+  std::map<std::string, std::string> after;
+  for (const auto& entry : fs::directory_iterator(out))
+    after[entry.path().filename().string()] = ndc::test::slurp(entry.path());
+  CHECK(after == before);  // the same files, byte for byte, and no staging folder
 }
