@@ -29,6 +29,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "budget.hpp"
 #include "cli/solve_options.hpp"
 #include "expectation.hpp"
 #include "generate.hpp"
@@ -1034,6 +1035,10 @@ std::vector<std::string> solveArguments(const std::string& problem, const std::s
     a.push_back("--jitter");
     a.push_back(std::to_string(*s.jitter));
   }
+  if (s.maxMemoryBytes > 0) {
+    a.push_back("--max-memory");
+    a.push_back(std::to_string(s.maxMemoryBytes));
+  }
   a.push_back("--json");
   return a;
 }
@@ -1335,9 +1340,12 @@ int runExperiment(ExperimentConfig config, const ExperimentOptions& options) {
           for (const std::string& a : solveArguments(p.file, runDir.string(), run.settings))
             command += " " + shellWord(a);
           writeAtomically(runDir / "command.txt", command + "\n");
-          pid = spawnRun(options.executable,
-                         solveArguments(p.path.string(), runDir.string(), run.settings),
-                         runDir / "stderr.txt", error);
+          // Children that run at once share the machine's memory budget.
+          Settings shared = run.settings;
+          shared.maxMemoryBytes = std::max<std::uint64_t>(defaultMemoryBudget() / jobs, 1u << 30);
+          pid =
+              spawnRun(options.executable, solveArguments(p.path.string(), runDir.string(), shared),
+                       runDir / "stderr.txt", error);
         } catch (const std::exception& e) {
           error = e.what();
         }
