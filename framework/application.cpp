@@ -27,7 +27,9 @@ double ApplicationData::parameter(int j, double x) const {
   if (j >= static_cast<int>(knots.size()) || knots[j].size() < 2) return x;
   const auto& k = knots[j];
   const int spans = static_cast<int>(k.size()) - 1;
-  const int i = std::clamp(static_cast<int>(std::floor(x)), 0, spans - 1);
+  // Clamped in double: converting a NaN or a floor beyond int to int is undefined.
+  const double span = std::floor(x);
+  const int i = span >= spans - 1 ? spans - 1 : span > 0 ? static_cast<int>(span) : 0;
   return k[i] + (x - i) * (k[i + 1] - k[i]);
 }
 

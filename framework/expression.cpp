@@ -719,7 +719,10 @@ class Parser {
   std::unique_ptr<ExprNode> number() {
     std::size_t start = pos_;
     std::string token(numberToken());
-    if (token == ".") fail(start, "malformed number '.'");
+    // A mantissa without a digit ('.', '.e+5') is no number; strtod would read it as 0 and the
+    // exact readers (Interval, Mpfr) refuse it with another exception.
+    if (token.substr(0, token.find_first_of("eE")).find_first_of("0123456789") == std::string::npos)
+      fail(start, "malformed number '" + token + "'");
     // The value must be a finite double (the same rule for every scalar type).
     double v = std::strtod(token.c_str(), nullptr);
     if (!std::isfinite(v)) fail(start, "number out of range (not finite): '" + token + "'");
