@@ -7,6 +7,7 @@ packages=(
   build-essential cmake pkg-config
   libeigen3-dev libboost-dev libmpfr-dev libmpfi-dev libgmp-dev
   catch2 doxygen gnuplot-nox libtomlplusplus-dev libcli11-dev libbenchmark-dev
+  clang libclang-rt-14-dev
 )
 if [[ "${1:-}" == "--tex" ]]; then
   packages+=(texlive-latex-base texlive-latex-recommended texlive-latex-extra)

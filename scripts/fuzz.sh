@@ -1,0 +1,79 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer harnesses of tests/fuzz/ in the sanitized build (build-sanitize/, see
+# scripts/sanitize.sh) and runs each for N seconds on a scratch copy of its seed corpus, with
+# its dictionary (docs/testing.md).
+# Usage: scripts/fuzz.sh [--seconds N] [--keep] [harness ...]
+#   --seconds N  run time per harness (default 60)
+#   --keep       continue from the corpus a previous run grew instead of a fresh seed copy
+#   harness      fuzz_problem, fuzz_expression, fuzz_application (default: all)
+# For hours: scripts/fuzz.sh --seconds 3600 --keep   (one hour per harness, one at a time)
+# A finding (crash, sanitizer report, uncaught exception, timeout past 10 s, more than 2 GB)
+# stops that harness, keeps the input under build-sanitize/fuzz/<harness>/findings/ and makes
+# the script exit 1 after the other harnesses ran. Exits 0 with a message when clang is not
+# installed.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+seconds=60
+keep=0
+harnesses=()
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --seconds) seconds="${2:?--seconds needs a number}"; shift 2 ;;
+    --keep) keep=1; shift ;;
+    fuzz_*) harnesses+=("$1"); shift ;;
+    *) echo "usage: scripts/fuzz.sh [--seconds N] [--keep] [harness ...]" >&2; exit 2 ;;
+  esac
+done
+if ! [[ $seconds =~ ^[1-9][0-9]*$ ]]; then
+  echo "fuzz: --seconds must be a positive integer, got '$seconds'" >&2
+  exit 2
+fi
+if [[ ${#harnesses[@]} -eq 0 ]]; then
+  for f in tests/fuzz/fuzz_*.cpp; do harnesses+=("$(basename "$f" .cpp)"); done
+fi
+
+if ! command -v clang++ >/dev/null 2>&1 ||
+   [[ ! -e "$(clang++ -print-resource-dir)/lib/linux/libclang_rt.fuzzer-x86_64.a" ]]; then
+  echo "fuzz: clang++ or libFuzzer is not installed (Debian packages clang and" \
+       "libclang-rt-14-dev; scripts/setup.sh installs them): nothing done"
+  exit 0
+fi
+for h in "${harnesses[@]}"; do
+  [[ -f tests/fuzz/$h.cpp ]] || { echo "fuzz: no harness tests/fuzz/$h.cpp" >&2; exit 2; }
+done
+scripts/sanitize.sh --build "${harnesses[@]}"
+
+failed=()
+for h in "${harnesses[@]}"; do
+  work=build-sanitize/fuzz/$h
+  if [[ $keep -eq 0 || ! -d $work/corpus ]]; then
+    rm -rf "$work/corpus"
+    mkdir -p "$work/corpus"
+    cp tests/fuzz/seeds/$h/* "$work/corpus/"
+    # The file harnesses also start from the regression corpus (past findings, hostile files).
+    if [[ $h != fuzz_expression ]] && compgen -G 'tests/corpus/*.toml' >/dev/null; then
+      cp tests/corpus/*.toml "$work/corpus/"
+    fi
+  fi
+  mkdir -p "$work/findings"
+  max_len=8192
+  [[ $h == fuzz_expression ]] && max_len=2048
+  options=(-max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -max_len=$max_len
+           -dict=tests/fuzz/$h.dict -artifact_prefix="$work/findings/" -print_final_stats=1)
+  export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+  echo "fuzz: $h for $seconds s (log $work/fuzz.log)"
+  status=0
+  build-sanitize/bin/$h "${options[@]}" "$work/corpus" >"$work/fuzz.log" 2>&1 || status=$?
+  runs=$(grep -o 'stat::number_of_executed_units: [0-9]*' "$work/fuzz.log" | grep -o '[0-9]*$' || true)
+  echo "fuzz: $h: ${runs:-?} executions, corpus $(ls "$work/corpus" | wc -l) inputs, exit status $status"
+  if [[ $status -ne 0 ]]; then
+    failed+=("$h")
+    grep -E 'ERROR|SUMMARY|runtime error|Test unit written|fuzz: check failed' "$work/fuzz.log" | head -20 >&2 || true
+    echo "fuzz: $h: finding kept in $work/findings/ (whole log: $work/fuzz.log)" >&2
+  fi
+done
+if [[ ${#failed[@]} -gt 0 ]]; then
+  echo "fuzz: findings in ${failed[*]}" >&2
+  exit 1
+fi
