@@ -707,7 +707,7 @@ TEST_CASE("experiment: SIGTERM stops the runner and its children, and keeps fini
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   CHECK((WIFEXITED(raw) && WEXITSTATUS(raw) == 143));
-  CHECK(seconds < 5);  // 2 s, then at most a second for the children
+  CHECK(seconds < 30);  // 2 s and a second for the children; the torus alone takes minutes
   // The circle finished and keeps its summary; the torus did not, and left no staging folder.
   int finished = 0;
   for (const auto& run : fs::directory_iterator(out / "stopped" / "runs")) {
