@@ -113,7 +113,10 @@ struct MemoryPlan {
     return problem.path + ": depth " + std::to_string(settings.depth) + " needs " +
            (prefix.empty() ? "about " : prefix) + formatBytes(bytes(cells)) + " of memory (" +
            prefix + count + " solution cells" + suffix + "), over the budget of " +
-           formatBytes(budget) + (byDefault ? " (75% of this machine's memory)" : "") +
+           formatBytes(budget) +
+           (byDefault ? " (" + std::to_string(std::lround(kDefaultMemoryShare * 100)) +
+                            "% of this machine's memory)"
+                      : "") +
            ": use a smaller depth, or --max-memory if the machine has more";
   }
 };

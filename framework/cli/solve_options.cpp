@@ -92,7 +92,9 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
   solve
       .add_option("--max-memory", o.maxMemory,
                   "Memory the run may use (K, M, G, T: powers of 1024); a depth that needs more "
-                  "is refused before the work (default: 75% of the machine's memory)")
+                  "is refused before the work (default: " +
+                      std::to_string(std::lround(kDefaultMemoryShare * 100)) +
+                      "% of the machine's memory)")
       ->type_name("SIZE");
   solve
       .add_option("--timeout", s.timeoutSeconds,
