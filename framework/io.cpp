@@ -146,7 +146,8 @@ std::string toJson(const Summary& s) {
     << ", \"projection\": " << jsonQuoted(t.projection)
     << ", \"classification\": " << jsonQuoted(t.classification)
     << ", \"connection\": " << jsonQuoted(t.connection)
-    << ", \"jitter\": " << (t.jitter ? std::to_string(*t.jitter) : "null") << "},\n";
+    << ", \"jitter\": " << (t.jitter ? std::to_string(*t.jitter) : "null")
+    << ", \"max_depth\": " << s.topology.maxDepth << "},\n";
   o << "  \"cells\": {\"visited\": " << s.visited << ", \"solution\": " << s.solution
     << ", \"normal\": " << s.normal << ", \"abnormal\": " << s.abnormal
     << ", \"failed\": " << s.failed << "},\n";
@@ -175,6 +176,13 @@ std::string toJson(const Summary& s) {
   o << ",\n    \"perturbation\": {\"level\": " << numberList(q.level)
     << ", \"attempts\": " << q.attempts << ", \"degenerate_crossings\": " << q.degenerateCrossings
     << "}},\n";
+  // Extension: the topology certificate and the adaptive refinement (docs/certificate.md).
+  const TopologyRecord& g = s.topology;
+  o << "  \"topology\": {\"certified\": " << (g.certified ? "true" : "false")
+    << ", \"reason\": " << (g.reason.empty() ? "null" : jsonQuoted(g.reason))
+    << ", \"certified_cells\": " << g.certifiedCells << ", \"refined_cells\": " << g.refinedCells
+    << ", \"uncertified_cells\": " << g.uncertifiedCells << ", \"base_level\": " << g.baseLevel
+    << ", \"max_level\": " << g.maxLevel << ", \"max_depth\": " << g.maxDepth << "},\n";
   o << "  \"timing_s\": {\"subdivision\": " << number(s.tSubdivision)
     << ", \"projection\": " << number(s.tProjection)
     << ", \"connection\": " << number(s.tConnection) << ", \"analysis\": " << number(s.tAnalysis)
@@ -286,6 +294,25 @@ void writeSingularCsv(std::ostream& out, const RunResult& r) {
   }
 }
 
+void writeUncertifiedCsv(std::ostream& out, const RunResult& r) {
+  out << "kind,level,reason";
+  for (int j = 0; j < r.n; ++j) out << ",lo" << j << ",hi" << j;
+  out << '\n';
+  for (const UncertifiedCell& c : r.summary.topology.uncertified) {
+    out << "cell," << c.level << ',' << c.reason;
+    for (int j = 0; j < r.n; ++j) out << ',' << number(c.lo[j]) << ',' << number(c.hi[j]);
+    out << '\n';
+  }
+  for (const SingularPoint& p : r.summary.singularPoints) {
+    out << "singular_point,,sigma_min=" << number(p.sigmaMin);
+    for (int j = 0; j < r.n; ++j) {
+      const std::string v = static_cast<std::size_t>(j) < p.point.size() ? number(p.point[j]) : "";
+      out << ',' << v << ',' << v;
+    }
+    out << '\n';
+  }
+}
+
 void writeInputPly(std::ostream& out, const TriangleSoup& input) {
   out << "ply\nformat ascii 1.0\ncomment ndcontour input surfaces\nelement vertex "
       << input.vertices.size() << "\nproperty double x\nproperty double y\nproperty double z\n"
@@ -367,6 +394,8 @@ std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const Ru
   add("mesh.ply", [&](std::ostream& o) { writePly(o, result); });
   add("cells.csv", [&](std::ostream& o) { writeCellsCsv(o, result); });
   add("singular.csv", [&](std::ostream& o) { writeSingularCsv(o, result); });
+  if (!result.summary.topology.certified)
+    add("uncertified.csv", [&](std::ostream& o) { writeUncertifiedCsv(o, result); });
   if (const ApplicationData* app = result.application.get()) {
     add("input.ply", [&](std::ostream& o) { writeInputPly(o, app->input); });
     if (app->secondImage && result.k == 1)
@@ -401,14 +430,15 @@ std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const Ru
   }
   // Publish with SIGINT and SIGTERM held: the previous summary goes first (the folder reads as
   // unfinished while files are replaced), and so do the previous outputs this run does not
-  // write (input.ply of an application problem); summary.json last marks a finished run.
+  // write (input.ply of an application problem, uncertified.csv of an uncertified run);
+  // summary.json last marks a finished run.
   const BlockInterrupts hold;
   const auto written = [&](const std::string& name) {
     for (const auto& f : files)
       if (f.first == name) return true;
     return false;
   };
-  for (const char* name : {"summary.json", "input.ply", "ruled.ply"})
+  for (const char* name : {"summary.json", "input.ply", "ruled.ply", "uncertified.csv"})
     if (std::string(name) == "summary.json" || !written(name)) {
       std::filesystem::remove(dir / name, error);
       if (error) abandon((dir / name).string() + ": cannot remove the previous output");

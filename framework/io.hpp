@@ -25,6 +25,12 @@ void writeCellsCsv(std::ostream& out, const RunResult& result);
 /// n coordinates). Only the header when there is none.
 void writeSingularCsv(std::ostream& out, const RunResult& result);
 
+/// Writes uncertified.csv: the header `kind,level,reason,lo0,hi0,..`, then one row per cell
+/// left uncertified at the maximum depth (`cell`, its level, which part of the certificate
+/// failed, its box) and one per located singular point (`singular_point`, sigma_min, the point
+/// as a box of width 0). Written only when the run is not certified.
+void writeUncertifiedCsv(std::ostream& out, const RunResult& result);
+
 /// `s` as a JSON string literal (quotes, backslashes and control characters escaped).
 std::string jsonQuoted(const std::string& s);
 
@@ -33,7 +39,8 @@ std::string jsonQuoted(const std::string& s);
 /// ndc::InputError when the file cannot be written.
 void writeAtomically(const std::filesystem::path& target, const std::string& text);
 
-/// Writes mesh.ply, cells.csv, singular.csv (input.ply and ruled.ply for applications that
+/// Writes mesh.ply, cells.csv, singular.csv, uncertified.csv when the run is not certified
+/// (input.ply and ruled.ply for applications that
 /// have them) and last summary.json into `dir` (created if needed); returns the file names
 /// written, in that order. Every file is first written into a hidden staging folder in `dir`
 /// (`.ndcontour-partial-PID`): a full disk or an interrupt there leaves the previous run whole.

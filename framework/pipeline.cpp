@@ -240,13 +240,14 @@ double precisionLoss(const Expression& e, const Box<double>& box, const Bernstei
 /// in a double run, so large that subdividing it would overflow (1e308 * x^2 + ...) or so
 /// inexact that its zero set is noise (precisionLoss above 1e-6, checked on the first 8 boxes).
 template <class S>
-void checkEquations(const Problem& problem, const Box<S>& domain) {
+std::vector<double> checkEquations(const Problem& problem, const Box<S>& domain) {
   constexpr double kMaxPrecisionLoss = 1e-6;
   constexpr std::size_t kPrecisionBoxes = 8;
   constexpr double kLimit = 1e300;
   std::vector<Box<S>> boxes;
   if (problem.roots.empty()) boxes.push_back(domain);
   for (const Box<double>& patch : problem.roots) boxes.push_back(toScalarBox<S>(patch));
+  std::vector<double> losses(problem.equations.size(), 0.0);
   for (std::size_t i = 0; i < problem.equations.size(); ++i) {
     for (std::size_t b = 0; b < boxes.size(); ++b) {
       const Box<S>& box = boxes[b];
@@ -254,6 +255,7 @@ void checkEquations(const Problem& problem, const Box<S>& domain) {
       if constexpr (std::is_same_v<S, double>) {
         const double loss =
             b < kPrecisionBoxes ? precisionLoss(problem.equations[i], box, form) : 0.0;
+        losses[i] = std::max(losses[i], loss);
         if (loss > kMaxPrecisionLoss) {
           std::ostringstream o;
           o << problem.path << ": equation " << i + 1 << " loses its precision in double "
@@ -287,6 +289,51 @@ void checkEquations(const Problem& problem, const Box<S>& domain) {
                          ": its zero set is a region, not a hypersurface");
     }
   }
+  return losses;
+}
+
+/// The rounding bound of each equation's Bernstein coefficients (relative to the largest) that
+/// the certificate assumes: in double the measured loss against 256-bit arithmetic, with a
+/// factor of 4 for the boxes not measured (B-spline patches beyond the first 8); in MPFR the
+/// conversion is exact to far below what any certificate resolves.
+std::vector<double> coefficientErrors(const std::vector<double>& losses) {
+  std::vector<double> out;
+  for (double loss : losses) out.push_back(4 * loss);
+  return out;
+}
+
+/// The children of a cell that the run's bounding cannot exclude (adaptive refinement): the
+/// subdivision of the cell's box by one level.
+template <class S>
+std::vector<std::uint8_t> refineCell(const Problem& problem, const Settings& settings,
+                                     const Subdivision& subdivision, const Box<double>& cell) {
+  const int n = problem.n();
+  const Bounding<S> bounding = createBounding<S>(settings.bounding, problem, toScalarBox<S>(cell));
+  const SolutionCells children = subdivide<S>(bounding, subdivision, Grid{n, 1, cell});
+  std::vector<std::uint8_t> flags(std::size_t{1} << n, 0);
+  for (std::size_t c = 0; c < children.size(); ++c) {
+    std::size_t bits = 0;
+    const auto index = children.cell(c);
+    for (int j = 0; j < n; ++j) bits |= std::size_t(index[j] & 1) << j;
+    flags[bits] = 1;
+  }
+  return flags;
+}
+
+/// A certified run must give a manifold mesh; the welded mesh is checked once more, so that a
+/// flaw between the certificate and the output (welding, joining at singular points) can
+/// never reach the user as a certified wrong answer.
+void checkCertificate(Summary& summary) {
+  TopologyRecord& t = summary.topology;
+  if (!t.certified) return;
+  const MeshStats& m = summary.mesh;
+  std::string flaw;
+  if (m.nonmanifoldEdges > 0) flaw = "non-manifold edges";
+  if (summary.k == 1 && m.branchVertices > 0) flaw = "branch vertices";
+  if (!summary.singularPoints.empty()) flaw = "singular points";
+  if (flaw.empty()) return;
+  t.certified = false;
+  t.reason = "the certificate holds but the welded mesh has " + flaw;
 }
 
 template <class S>
@@ -306,7 +353,7 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   const Grid grid = makeGrid(problem, settings);
   const Box<S> domain = toScalarBox<S>(grid.domain);
   const System<S> system(problem);
-  checkEquations<S>(problem, domain);
+  const std::vector<double> losses = checkEquations<S>(problem, domain);
   if (!problem.roots.empty() && settings.jitter)
     throw InputError(
         problem.path +
@@ -370,10 +417,21 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   // Alg. 1: connect the cells into a complex.
   const Projector<S> project = makeProjector<S>(projection);
   t = Clock::now();
-  ConnectionOutput<S> connected = connect<S>(
-      connection,
-      ConnectionInput<S>{problem, system, cells, projections, classes, project, problem.k()});
+  ConnectionInput<S> input{problem, system, cells, projections, classes, project, problem.k()};
+  input.maxLevel = maxDepthOf(problem, settings);
+  input.refine = [&](const Box<double>& cell) {
+    return refineCell<S>(problem, settings, subdivision, cell);
+  };
+  input.coefficientError = coefficientErrors(losses);
+  ConnectionOutput<S> connected = connect<S>(connection, input);
   summary.tConnection = secondsSince(t);
+  summary.topology = connected.topology;
+  if (settings.connection != "crossing") {
+    summary.topology.baseLevel = summary.topology.maxLevel = settings.depth;
+    summary.topology.maxDepth = settings.depth;
+    summary.topology.reason =
+        "the " + settings.connection + " connection does not certify topology (crossing does)";
+  }
   summary.ambiguousCells = connected.ambiguousCells;
   summary.singularCells = connected.singularCells;
   summary.offManifoldVertices = connected.offManifoldVertices;
@@ -391,6 +449,7 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   const Complex<S> welded = weld<S>(connected.complex, 1e-9 * diameter);
   summary.mesh = analyse<S>(welded, system, project);
   summary.tAnalysis = secondsSince(t);
+  checkCertificate(summary);
 
   // Outputs in double.
   for (const S& v : welded.vertices) result.vertices.push_back(toDouble(v));
@@ -424,6 +483,23 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
 
 }  // namespace
 
+int defaultMaxDepth(int n, int depth) {
+  int level = depth + kDefaultRefinementLevels;
+  while (level > depth && !Grid::fits(n, level)) --level;
+  return level;
+}
+
+int maxDepthOf(const Problem& problem, const Settings& settings) {
+  if (settings.maxDepth == 0) return defaultMaxDepth(problem.n(), settings.depth);
+  if (settings.maxDepth < settings.depth || !Grid::fits(problem.n(), settings.maxDepth)) {
+    throw InputError(problem.path + ": --max-depth " + std::to_string(settings.maxDepth) +
+                     " is out of range for depth " + std::to_string(settings.depth) +
+                     " and n = " + std::to_string(problem.n()) +
+                     " (need depth <= max-depth, n * max-depth <= 64 and max-depth <= 30)");
+  }
+  return settings.maxDepth;
+}
+
 int depthForTolerance(const Problem& problem, double tolerance) {
   if (!(tolerance > 0) || !std::isfinite(tolerance)) {
     throw InputError(problem.path + ": tolerance must be a positive number");
@@ -444,6 +520,7 @@ RunResult runPipeline(const Problem& problem, const Settings& settings, const Pr
                      " is out of range for n = " + std::to_string(problem.n()) +
                      " (need 1 <= depth and n * depth <= 64)");
   }
+  maxDepthOf(problem, settings);  // refuses a bad --max-depth before any work
   // The default connection builds curves and surfaces only: refuse other k before any work.
   if (settings.connection == "crossing" && problem.k() != 1 && problem.k() != 2) {
     throw InputError(problem.path + ": the crossing connection supports k = 1 (curves) and k = 2 " +

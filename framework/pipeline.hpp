@@ -39,6 +39,19 @@ struct RunResult {
 RunResult runPipeline(const Problem& problem, const Settings& settings,
                       const Progress& progress = {});
 
+/// Levels below `--depth` that adaptive refinement may reach by default. 0 for now: the
+/// certificate is computed on every run, but refinement is opt-in (`--max-depth`) until the
+/// adaptive connection is closed on every corpus (docs/certificate.md, "Status").
+inline constexpr int kDefaultRefinementLevels = 0;
+
+/// The default `--max-depth`: depth + kDefaultRefinementLevels, or less where the cell keys
+/// of the 2^n-tree would not fit (n * level <= 64).
+int defaultMaxDepth(int n, int depth);
+
+/// The maximum level of refinement of a run: settings.maxDepth, or the default when it is 0;
+/// throws InputError when it is below the depth or does not fit.
+int maxDepthOf(const Problem& problem, const Settings& settings);
+
 /// The smallest depth L whose cells are no wider than `tolerance` on every axis.
 int depthForTolerance(const Problem& problem, double tolerance);
 

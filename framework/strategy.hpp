@@ -68,6 +68,15 @@ struct ConnectionInput {
   const std::vector<CellClass>& classes;
   Projector<S> project;  ///< Newton projection onto M (for centroids, dual vertices)
   int k = 1;             ///< manifold dimension
+  /// Adaptive refinement (docs/certificate.md): which of the 2^n children of a cell may hold
+  /// M (child c holds the upper half of axis j when bit j of c is set), from the run's
+  /// bounding. Empty: no refinement.
+  std::function<std::vector<std::uint8_t>(const Box<double>& cell)> refine;
+  /// The deepest level refinement may reach (at least the grid's depth).
+  int maxLevel = 0;
+  /// Per equation: a bound on the rounding error of its Bernstein coefficients on the domain,
+  /// relative to the largest (certificates treat smaller coefficients as unknown signs).
+  std::vector<double> coefficientError;
 };
 
 /// What a connection strategy returns.
@@ -80,6 +89,8 @@ struct ConnectionOutput {
   std::int64_t offManifoldVertices = 0;
   /// The level perturbation the connection used (crossing), else empty.
   PerturbationRecord perturbation;
+  /// The topology certificate (crossing); other connections leave it uncertified.
+  TopologyRecord topology;
 };
 
 /// Connection: builds the k-simplices. Models: PaperConnection, NaiveConnection

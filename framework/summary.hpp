@@ -25,6 +25,9 @@ struct Settings {
   /// Wall-clock limit of the whole solve in seconds (`--timeout`; the CLI enforces it); unset:
   /// none.
   std::optional<double> timeoutSeconds;
+  /// The deepest level adaptive refinement may reach (`--max-depth`); 0: the default,
+  /// ndc::defaultMaxDepth (docs/certificate.md).
+  int maxDepth = 0;
 };
 
 /// Mesh statistics after welding identical vertices (`mesh` in summary.json).
@@ -71,6 +74,28 @@ struct PerturbationRecord {
   std::int64_t degenerateCrossings = 0;
 };
 
+/// A cell left uncertified at the maximum depth (`uncertified.csv`).
+struct UncertifiedCell {
+  std::vector<double> lo, hi;  ///< its closed box
+  int level = 0;               ///< its level in the 2^n-tree
+  std::string reason;          ///< which part of the certificate failed (docs/certificate.md)
+};
+
+/// The topology certificate of a run (`topology` in summary.json; docs/certificate.md).
+struct TopologyRecord {
+  /// True only when every cell of the final 2^n-tree is certified and every crossing proven:
+  /// then the mesh is a closed (or bounded) manifold with the topology of M.
+  bool certified = false;
+  std::string reason;  ///< why not (empty when certified)
+  /// Leaves of the final tree that hold a certified piece of M (or are proven empty), that
+  /// were refined on the way, and that stay uncertified at the maximum depth.
+  std::int64_t certifiedCells = 0, refinedCells = 0, uncertifiedCells = 0;
+  int baseLevel = 0;  ///< `--depth`
+  int maxLevel = 0;   ///< the deepest level a leaf reached
+  int maxDepth = 0;   ///< the limit of refinement (`--max-depth`)
+  std::vector<UncertifiedCell> uncertified;
+};
+
 /// Everything summary.json holds.
 struct Summary {
   std::string problem;
@@ -82,6 +107,8 @@ struct Summary {
   /// Dual vertices that Newton could not bring onto M (written at their crossing mean).
   std::int64_t offManifoldVertices = 0;
   PerturbationRecord perturbation;
+  /// The topology certificate and the adaptive refinement behind it.
+  TopologyRecord topology;
   /// Located singular points of M (`diagnostics.singular_points`, `singular.csv`).
   std::vector<SingularPoint> singularPoints;
   /// The comparison with `[expect]`; empty when the problem has none.

@@ -151,7 +151,9 @@ const std::string kHeader =
     "timing_s.projection,timing_s.connection,timing_s.analysis,timing_s.total,"
     "diagnostics.off_manifold_vertices,diagnostics.perturbation.attempts,"
     "diagnostics.perturbation.degenerate_crossings,mesh.boundary_components,"
-    "budget.max_memory_bytes,budget.estimated_memory_bytes,budget.timeout_s";
+    "budget.max_memory_bytes,budget.estimated_memory_bytes,budget.timeout_s,"
+    "topology.base_level,topology.certified_cells,topology.max_depth,topology.max_level,"
+    "topology.reason,topology.refined_cells,topology.uncertified_cells";
 
 const std::string kTiny =
     "id = \"tiny\"\nartefact = \"table\"\ndescription = \"a tiny grid\"\n"

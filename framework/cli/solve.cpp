@@ -76,6 +76,18 @@ void warn(const Problem& problem, const Summary& s, bool check) {
               << " attempts: general position is not verified\n";
 }
 
+/// The one line on the topology certificate: certified, or not and why.
+void printTopology(const TopologyRecord& t) {
+  if (t.certified) {
+    std::cout << "topology: certified (" << t.certifiedCells << " cells";
+    if (t.refinedCells > 0)
+      std::cout << ", " << t.refinedCells << " refined, down to level " << t.maxLevel;
+    std::cout << ")\n";
+  } else {
+    std::cout << "topology: not certified: " << t.reason << '\n';
+  }
+}
+
 /// The human summary's lines for `[expect]`, singular points, off-manifold vertices and the
 /// perturbation.
 void printDiagnostics(const Summary& s) {
@@ -105,6 +117,7 @@ void printDiagnostics(const Summary& s) {
   if (s.offManifoldVertices > 0)
     std::cout << "off-manifold vertices: " << s.offManifoldVertices
               << " (dual vertices Newton could not project onto M)\n";
+  printTopology(s.topology);
   const PerturbationRecord& q = s.perturbation;
   if (!q.level.empty() || q.attempts > 0) {
     std::cout << "general position: ";

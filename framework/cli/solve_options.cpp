@@ -12,6 +12,7 @@
 
 #include "budget.hpp"
 #include "grid.hpp"
+#include "pipeline.hpp"
 
 namespace ndc::cli {
 
@@ -62,6 +63,13 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
                   "Cell size h: the smallest depth whose cells are no wider than h")
       ->type_name("h")
       ->excludes(depth);
+  solve
+      .add_option("--max-depth", s.maxDepth,
+                  "Deepest level adaptive refinement may reach where a cell's topology "
+                  "certificate fails (default: depth + " +
+                      std::to_string(kDefaultRefinementLevels) +
+                      ", no refinement; genus2 at depth 5 needs 11)")
+      ->type_name("L");
   solve.add_option("--bounding", s.bounding, "Bounding strategy")
       ->type_name(joined(kBoundingNames))
       ->capture_default_str();
@@ -87,7 +95,8 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
       ->type_name("SEED");
   solve
       .add_option("--out", o.outDir,
-                  "Write summary.json, mesh.ply, cells.csv and singular.csv to DIR")
+                  "Write summary.json, mesh.ply, cells.csv, singular.csv and (when the topology "
+                  "is not certified) uncertified.csv to DIR")
       ->type_name("DIR");
   solve
       .add_option("--max-memory", o.maxMemory,
@@ -119,6 +128,10 @@ void validateSolveOptions(SolveOptions& o) {
 
   if (s.depth < kMinDepth || s.depth > kMaxDepth)
     throw UsageError("--depth " + std::to_string(s.depth) + " is out of range (accepted: " +
+                     std::to_string(kMinDepth) + ".." + std::to_string(kMaxDepth) + ")");
+
+  if (s.maxDepth != 0 && (s.maxDepth < kMinDepth || s.maxDepth > kMaxDepth))
+    throw UsageError("--max-depth " + std::to_string(s.maxDepth) + " is out of range (accepted: " +
                      std::to_string(kMinDepth) + ".." + std::to_string(kMaxDepth) + ")");
 
   // The precision belongs to the scalar: double is always 53 bits.

@@ -7,11 +7,15 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <numeric>
+#include <sstream>
 #include <unordered_map>
 #include <vector>
 
 #include "bernstein.hpp"
 #include "interval.hpp"
+#include "strategies/connection/cell_tree.hpp"
+#include "strategies/connection/certificate.hpp"
 
 namespace ndc {
 namespace {
@@ -52,14 +56,19 @@ class FaceSolver {
   /// overwritten); `patches` are the face slices of F (m variables, domain = the face box),
   /// shifted here by the level; `ends` marks the free axes' domain ends. Appends the roots
   /// (full n-dim points) to `roots`; returns false if some root could not be proven unique.
+  /// `margins[i]`: coefficients of F_i smaller than this in magnitude may have the wrong sign
+  /// (the rounding bound of the Bernstein forms, docs/certificate.md).
   bool solve(std::vector<S> point, std::vector<int> freeAxes, std::vector<Bernstein<S>>& patches,
-             FaceEnds ends, std::vector<std::vector<S>>& roots) {
+             FaceEnds ends, std::vector<std::vector<S>>& roots, std::span<const S> margins) {
     point_ = std::move(point);
     free_ = std::move(freeAxes);
+    margins_ = margins;
     certain_ = true;
+    proven_ = true;
     boxes_ = 0;
     if (m_ == 1) {
       edge(patches.front().domain(), roots);
+      proven_ = edgeProven(patches.front());
       return true;
     }
     for (int i = 0; i < m_; ++i) {
@@ -69,14 +78,24 @@ class FaceSolver {
     return certain_;
   }
 
+  /// Whether every decision of the last solve is a proof: exclusions by coefficient signs
+  /// beyond the rounding margin or by interval evaluation, uniqueness and existence by the
+  /// Krawczyk test in interval arithmetic, edge signs by interval values.
+  bool proven() const { return proven_ && certain_; }
+
  private:
   void recurse(const std::vector<Bernstein<S>>& patches, const FaceEnds& ends, int depth,
                std::vector<std::vector<S>>& roots) {
     //! [crossing-face]
     // Exclusion: a coefficient hull of one sign on the face means no root.
     const Box<S>& box = patches.front().domain();
-    for (const auto& p : patches) {
-      if (p.excludesZero()) return;
+    for (std::size_t i = 0; i < patches.size(); ++i) {
+      if (!patches[i].excludesZero()) continue;
+      // The exclusion is a proof when every coefficient clears the rounding margin, or when
+      // interval evaluation confirms it; otherwise the decision stands but is not proven.
+      if (!clearsRange(patches[i], S(0), S(0), margins_[i]) && !intervalExcludes(box, int(i)))
+        proven_ = false;
+      return;
     }
     std::vector<S> root;
     const bool found = newton(box, root) && inside(box, ends, root);
@@ -90,7 +109,10 @@ class FaceSolver {
       // The unique root lies in the closed face; if Newton did not reach it inside the
       // half-open face, it is on an upper boundary owned by the next face, or Newton strayed.
       std::vector<S> y;
-      if (newton(box, y) && insideClosed(box, y)) return;  // owned by the neighbour face
+      if (newton(box, y) && insideClosed(box, y)) {
+        proven_ = false;  // K proves the root interior, Newton puts it on the boundary
+        return;           // owned by the neighbour face
+      }
       // Newton failed, but K inside int X proves one root strictly inside this box (so inside
       // the half-open face): keep it, at the box centre (a fold of F = c, where the face
       // Jacobian is nearly singular, can stall Newton's convergence test).
@@ -155,6 +177,34 @@ class FaceSolver {
     }
     x[free_[0]] = t;
     roots.push_back(x);
+  }
+
+  /// The sign rule on an edge is a proof when the signs of F at both ends are (the end
+  /// coefficients clear the rounding margin, or interval values exclude 0 or are exactly 0,
+  /// which counts as +) and the edge holds at most one root of F: the coefficients, or the
+  /// differences of consecutive ones (the derivative), have one strict sign.
+  bool edgeProven(const Bernstein<S>& patch) const {
+    using I = Interval<S>;
+    const S& margin = margins_[0];
+    const auto c = patch.coefficients();
+    std::vector<I> x;
+    x.reserve(n_);
+    for (int j = 0; j < n_; ++j) x.emplace_back(point_[j]);
+    const Box<S>& box = patch.domain();
+    for (int end = 0; end < 2; ++end) {
+      using std::abs;
+      if (abs(end ? c.back() : c.front()) > margin) continue;
+      x[free_[0]] = I(end ? box.hi[0] : box.lo[0]);
+      const I v = system_.equations()[0].template evaluate<S>(std::span<const I>(x));
+      if (v.containsZero() && !(v.lower() == 0 && v.upper() == 0)) return false;
+    }
+    if (clearsRange(patch, S(0), S(0), margin)) return true;
+    if (!derivativeHull(patch, 0, margin).containsZero()) return true;
+    // F >= 0 on the whole edge (it may touch 0, as along a line of M on a grid line): the
+    // level set F = -delta of the sign rule does not meet it.
+    x[free_[0]] = I(box.lo[0], box.hi[0]);
+    const I v = system_.equations()[0].template evaluate<S>(std::span<const I>(x));
+    return v.lower() >= 0 || v.upper() < 0;
   }
 
   std::vector<S> fullPoint(const std::vector<S>& y) const {
@@ -278,29 +328,20 @@ class FaceSolver {
   /// K = y - Y F(y) + (I - Y J(X)) (X - y). K inside int X proves one root in X;
   /// K disjoint from X proves none. J(X) comes from the Bernstein derivative hulls.
   Krawczyk krawczyk(const std::vector<Bernstein<S>>& patches) {
-    // J(X) from the hulls of the derivative patches of the face.
+    // J(X) from the hulls of the derivative patches, widened by the rounding margin.
     const Box<S>& box = patches.front().domain();
     jx_.resize(std::size_t(m_) * m_);
     for (int i = 0; i < m_; ++i) {
-      for (int j = 0; j < m_; ++j) {
-        const auto [lo, hi] = patches[i].derivative(j).coefficientRange();
-        jx_[std::size_t(i) * m_ + j] = Interval<S>(lo, hi);
-      }
+      for (int j = 0; j < m_; ++j)
+        jx_[std::size_t(i) * m_ + j] = derivativeHull(patches[i], j, margins_[i]);
     }
     return krawczyk(box);
   }
 
-  /// Krawczyk on the box `root +- width` around a Newton root, with J(X) from the interval
-  /// gradient; it contains the whole current face when `width` is the face's width, so
-  /// kUnique proves the root is the face's only one even when it lies near the face boundary.
-  Krawczyk krawczykAround(const std::vector<S>& root, const Box<S>& face) {
+  /// J(X) on a box (free coordinates) into jx_, by interval evaluation of the gradients
+  /// (outward rounded; for boxes that are not a face patch's).
+  void intervalJacobian(const Box<S>& box) {
     using I = Interval<S>;
-    Box<S> box{root, root};
-    for (int j = 0; j < m_; ++j) {
-      const S w = face.hi[j] - face.lo[j];
-      box.lo[j] -= w;
-      box.hi[j] += w;
-    }
     std::vector<I> x;
     x.reserve(n_);
     for (int j = 0; j < n_; ++j) x.emplace_back(point_[j]);
@@ -311,6 +352,30 @@ class FaceSolver {
       system_.equations()[i].template evaluate<S>(std::span<const I>(x), std::span<I>(gradient));
       for (int j = 0; j < m_; ++j) jx_[std::size_t(i) * m_ + j] = gradient[free_[j]];
     }
+  }
+
+  /// Whether F_i - c_i, evaluated in interval arithmetic over the face box, excludes 0.
+  bool intervalExcludes(const Box<S>& box, int i) const {
+    using I = Interval<S>;
+    std::vector<I> x;
+    x.reserve(n_);
+    for (int j = 0; j < n_; ++j) x.emplace_back(point_[j]);
+    for (int j = 0; j < m_; ++j) x[free_[j]] = I(box.lo[j], box.hi[j]);
+    const I f = system_.equations()[i].template evaluate<S>(std::span<const I>(x)) - I(level_[i]);
+    return !f.containsZero();
+  }
+
+  /// Krawczyk on the box `root +- width` around a Newton root, with J(X) from the interval
+  /// gradient; it contains the whole current face when `width` is the face's width, so
+  /// kUnique proves the root is the face's only one even when it lies near the face boundary.
+  Krawczyk krawczykAround(const std::vector<S>& root, const Box<S>& face) {
+    Box<S> box{root, root};
+    for (int j = 0; j < m_; ++j) {
+      const S w = face.hi[j] - face.lo[j];
+      box.lo[j] -= w;
+      box.hi[j] += w;
+    }
+    intervalJacobian(box);
     return krawczyk(box);
   }
 
@@ -363,7 +428,9 @@ class FaceSolver {
   std::vector<int> free_;
   std::vector<S> f_, jacobian_;
   std::vector<Interval<S>> jx_;
+  std::span<const S> margins_;
   bool certain_ = true;
+  bool proven_ = true;
   /// Boxes of the current face subdivided so far, and the most one face may take: an isolated
   /// root needs about 2 maxDepth m boxes, a fold a few times that.
   long boxes_ = 0;
@@ -416,12 +483,6 @@ int faceDegree(const System<S>& system, const std::vector<std::vector<S>>& roots
   if (count >= 2 && std::abs(degree) < count && singular) degree = count;
   return degree;
 }
-
-/// A dual k-cell: the 2^k cells around a crossed m-face, in cyclic order (k = 2).
-struct DualCell {
-  std::array<std::int32_t, 4> cells{-1, -1, -1, -1};
-  std::int32_t root = -1;  ///< first root of its face, in the root list
-};
 
 /// The level c of the perturbed system F = c whose crossings with the grid faces decide the
 /// dual cells (docs/crossing.md, "General position"). M itself may pass through vertices,
@@ -523,234 +584,619 @@ struct UnionFind {
   void unite(int a, int b) { parent[find(a)] = find(b); }
 };
 
-}  // namespace
+/// A crossed minimal m-face of the tree (docs/certificate.md): the leaves around it in cyclic
+/// order (k = 2; a coarser leaf that fills two of the four quadrants appears once, so the
+/// polygon is a triangle), or the two leaves across it (k = 1). A node is a leaf number, or
+/// -1 - tag for a region beyond the domain (such a polygon only enters the certificate).
+struct Polygon {
+  std::array<std::int64_t, 4> node{-1, -1, -1, -1};
+  int size = 0;
+  std::int32_t root = -1;  ///< its crossing, in the root list
+  bool outside = false;    ///< a node lies beyond the domain: not a cell of the mesh
+};
 
+/// What the face solver found on one minimal m-face (cached: a face is solved once per level c).
 template <class S>
-ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) const {
-  using std::abs;
-  using std::sqrt;
-  const SolutionCells& cells = in.cells;
-  const Grid& grid = cells.grid;
-  const int n = grid.n, k = in.k, m = n - k;
-  if (k != 1 && k != 2) {
-    throw InputError("connection 'crossing' supports k = 1 and k = 2, not k = " +
-                     std::to_string(k));
+struct FaceResult {
+  std::vector<S> root;          ///< the first root (n coordinates), if any
+  int roots = 0;                ///< how many roots
+  int degree = 0;               ///< faceDegree
+  bool certain = true;          ///< every root decided (else its cells are singular cells)
+  bool proven = true;           ///< every decision a proof (FaceSolver::proven)
+  std::int64_t degenerate = 0;  ///< roots within rounding of the face's boundary
+};
+
+/// Why a leaf is not certified (docs/certificate.md); the names go to uncertified.csv.
+enum class Failure : std::uint8_t { kNone, kCrossing, kGraph, kFaceGraph, kLink };
+
+const char* failureName(Failure f) {
+  switch (f) {
+    case Failure::kCrossing:
+      return "crossing";
+    case Failure::kGraph:
+      return "graph";
+    case Failure::kFaceGraph:
+      return "face-graph";
+    case Failure::kLink:
+      return "link";
+    case Failure::kNone:
+      break;
   }
-  Box<S> domain;
-  for (int j = 0; j < n; ++j) {
-    domain.lo.push_back(S(grid.domain.lo[j]));
-    domain.hi.push_back(S(grid.domain.hi[j]));
+  return "";
+}
+
+/// The crossing connection on an adaptive 2^n-tree: crossings on the minimal m-faces, the
+/// certificate of every leaf, refinement of the leaves that fail it, and the dual complex.
+template <class S>
+class AdaptiveCrossing {
+ public:
+  AdaptiveCrossing(const ConnectionInput<S>& in, int maxFaceDepth)
+      : in_(in),
+        grid_(in.cells.grid),
+        n_(grid_.n),
+        k_(in.k),
+        m_(n_ - k_),
+        maxFaceDepth_(maxFaceDepth),
+        position_(in, grid_),
+        graphTest_(grid_.n, grid_.n - in.k),
+        tree_(grid_, std::max(grid_.depth, in.refine ? in.maxLevel : grid_.depth)) {
+    for (int j = 0; j < n_; ++j) {
+      domain_.lo.push_back(S(grid_.domain.lo[j]));
+      domain_.hi.push_back(S(grid_.domain.hi[j]));
+    }
+    for (int a = 0; a < n_; ++a) {
+      if (k_ == 1) fixedAxes_.push_back({a, -1});
+      for (int b = a + 1; k_ == 2 && b < n_; ++b) fixedAxes_.push_back({a, b});
+    }
+    // Refinement stops at this many leaves (a bound on memory; far above what thin features
+    // need, which grows with the cells near them, not with the grid).
+    maxLeaves_ = std::max<std::size_t>(16 * in.cells.size(), std::size_t{1} << 20);
   }
-  // The Bernstein forms each cell's are restricted from: of the domain, or (B-spline input) of
-  // the patch holding the cell, built when first needed.
-  const Problem& problem = in.problem;
-  std::map<CellKey, std::vector<Bernstein<S>>> patchForms;
-  std::vector<std::int32_t> patchIndex(n);
-  const auto formsFor = [&](std::span<const std::int32_t> ci) -> const std::vector<Bernstein<S>>& {
-    const int below = grid.depth - problem.rootLevel;
-    CellKey key = 0;
-    for (int j = 0; j < n; ++j) {
-      patchIndex[j] = ci[j] >> below;
-      key = key * (CellKey{1} << problem.rootLevel) + static_cast<CellKey>(patchIndex[j]);
+
+  ConnectionOutput<S> run() {
+    ConnectionOutput<S> out;
+    out.complex.n = n_;
+    out.complex.k = k_;
+    // General position: try levels until no crossing is within rounding of a face boundary.
+    std::int64_t degenerate = 0;
+    for (int attempt = 0;; ++attempt) {
+      // For m = 1 the sign rule decides (the level set F = -delta, delta -> 0+): level 0.
+      level_ = m_ == 1 ? std::vector<S>(1, S(0)) : position_.level(attempt);
+      degenerate = refineAndCertify();
+      out.perturbation.attempts = attempt + 1;
+      out.perturbation.degenerateCrossings = degenerate;
+      out.perturbation.level.clear();
+      if (m_ > 1) {
+        for (const S& c : level_) out.perturbation.level.push_back(toDouble(c));
+      }
+      if (degenerate == 0 || m_ == 1 || attempt + 1 == GeneralPosition<S>::kAttempts) break;
     }
-    auto it = patchForms.find(key);
-    if (it != patchForms.end()) return it->second;
-    Box<S> patch;
-    const S cells = S(static_cast<double>(std::int64_t{1} << problem.rootLevel));
-    for (int j = 0; j < n; ++j) {
-      const S w = (domain.hi[j] - domain.lo[j]) / cells;
-      patch.lo.push_back(domain.lo[j] + w * S(static_cast<double>(patchIndex[j])));
-      patch.hi.push_back(domain.lo[j] + w * S(static_cast<double>(patchIndex[j] + 1)));
-    }
+    record(out.topology, degenerate);
+    buildComplex(out);
+    return out;
+  }
+
+ private:
+  using Occ = Occupant::Kind;
+
+  /// The root forms a leaf's patches are restricted from (the domain's, or the B-spline
+  /// patch's), with the rounding margin of each equation.
+  struct RootForms {
     std::vector<Bernstein<S>> forms;
-    for (const auto& e : in.system.equations())
-      forms.push_back(e.template toBernstein<S>(problem.roots.empty() ? domain : patch));
-    return patchForms.emplace(key, std::move(forms)).first->second;
+    std::vector<S> margins;
   };
 
-  std::vector<std::uint8_t> uncertain;
-  std::vector<DualCell> duals;
-  std::vector<S> rootPoints;  // n per recorded dual cell: the crossing it stands for
-  // The cells the dual complex is built on: the solution cells, and the cells that the level
-  // set F = c enters where M only touches them (added when a crossed face needs them).
-  SolutionCells set;
-  std::vector<Bernstein<S>> cellPatches(m), facePatches(m);
-  std::vector<std::vector<S>> roots;
-  std::vector<std::int32_t> index(n);
-  const std::int64_t top = grid.cellsPerAxis();
-  const GeneralPosition<S> position(in, grid);
-  // The k-subsets of the axes: the fixed axes of the m-faces.
-  std::vector<std::array<int, 2>> fixedAxes;
-  for (int a = 0; a < n; ++a) {
-    if (k == 1) fixedAxes.push_back({a, -1});
-    for (int b = a + 1; k == 2 && b < n; ++b) fixedAxes.push_back({a, b});
+  const RootForms& rootForms(std::span<const std::int32_t> index, int level) {
+    const Problem& problem = in_.problem;
+    const int patchLevel = problem.roots.empty() ? 0 : problem.rootLevel;
+    CellKey key = 0;
+    std::vector<std::int32_t> patch(n_);
+    for (int j = 0; j < n_; ++j) {
+      patch[j] = index[j] >> (level - patchLevel);
+      key = key * (CellKey{1} << patchLevel) + static_cast<CellKey>(patch[j]);
+    }
+    auto it = rootForms_.find(key);
+    if (it != rootForms_.end()) return it->second;
+    Box<S> box = domain_;
+    if (!problem.roots.empty()) {
+      Grid patchGrid = grid_;
+      patchGrid.depth = patchLevel;
+      box = cellBox(patchGrid, domain_, patch);
+    }
+    RootForms rf;
+    const S unit = ScalarTraits<S>::epsilon();
+    for (std::size_t i = 0; i < in_.system.equations().size(); ++i) {
+      rf.forms.push_back(in_.system.equations()[i].template toBernstein<S>(box));
+      const auto [lo, hi] = rf.forms.back().coefficientRange();
+      using std::abs;
+      const double relative = i < in_.coefficientError.size() ? in_.coefficientError[i] : 0.0;
+      rf.margins.push_back((S(relative) + 1024 * unit) * std::max<S>(abs(lo), abs(hi)));
+    }
+    return rootForms_.emplace(key, std::move(rf)).first->second;
   }
 
-  // One pass over the faces for the level set F = c; returns the crossings that lie within
-  // rounding of their face's boundary (0: c puts M in general position for this grid).
-  const auto crossFaces = [&](const std::vector<S>& level) -> std::int64_t {
-    std::int64_t degenerate = 0;
-    set = cells;
-    uncertain.assign(set.size(), 0);
-    duals.clear();
-    rootPoints.clear();
-    FaceSolver<S> solver(in.system, maxFaceDepth, level, position.slack);
-    std::vector<std::int32_t> corner(n);
-    std::array<CellKey, 4> around{};
-    std::array<std::int32_t, 4> aroundCell{};
+  Box<S> leafBox(std::int32_t leaf) const {
+    return cellBox(tree_.grid(tree_.level(leaf)), domain_, tree_.index(leaf));
+  }
+
+  /// The leaf's Bernstein patches (into patches_) and whether they prove that M_c does not
+  /// meet the closed leaf (then no face of it is crossed); bandEmpty_ records whether no level
+  /// set F = t c, t in [0, 1], meets it either (M itself, and the isotopy from M to M_c).
+  bool restrictTo(std::int32_t leaf) {
+    const RootForms& rf = rootForms(tree_.index(leaf), tree_.level(leaf));
+    const Box<S> box = leafBox(leaf);
+    patches_.resize(m_);
+    margins_ = rf.margins;
+    bool empty = false, band = false;
+    for (int i = 0; i < m_; ++i) {
+      patches_[i] = rf.forms[i].restrict(box);
+      const S c = level_[i];
+      empty = empty || clearsRange(patches_[i], c, c, rf.margins[i]);
+      band = band ||
+             clearsRange(patches_[i], std::min<S>(S(0), c), std::max<S>(S(0), c), rf.margins[i]);
+    }
+    bandEmpty_.resize(tree_.size(), 0);
+    bandEmpty_[leaf] = band;
+    return empty;
+  }
+
+  /// Solves face (axes, side) of `leaf` (patches_ hold the leaf's patches).
+  FaceResult<S> solveFace(std::int32_t leaf, const std::array<int, 2>& axes, int side) {
+    const Box<S> box = leafBox(leaf);
+    const auto ci = tree_.index(leaf);
+    const std::int64_t top = tree_.grid(tree_.level(leaf)).cellsPerAxis();
     FaceEnds ends;
     std::vector<int> freeAxes;
-    // Every m-face of every cell, once (the set grows while it is walked).
-    for (std::size_t c = 0; c < set.size(); ++c) {
-      const std::vector<std::int32_t> ci(set.cell(c).begin(), set.cell(c).end());
-      const Box<S> box = cellBox(grid, domain, ci);
+    std::vector<S> point(box.lo);
+    for (int j = 0; j < n_; ++j) {
+      if (j == axes[0] || j == axes[1]) continue;
+      freeAxes.push_back(j);
+      ends.lower.push_back(ci[j] == 0);
+      ends.upper.push_back(ci[j] + 1 == top);
+    }
+    // Slice the highest fixed axis first so the lower axis numbers stay valid.
+    std::vector<Bernstein<S>> face(m_);
+    for (int i = 0; i < m_; ++i) {
+      face[i] = patches_[i];
+      for (int t = k_ - 1; t >= 0; --t) {
+        const bool upper = (side >> t) & 1;
+        face[i] = face[i].faceSlice(axes[t], upper);
+        point[axes[t]] = upper ? box.hi[axes[t]] : box.lo[axes[t]];
+      }
+    }
+    std::vector<std::vector<S>> roots;
+    FaceSolver<S> solver(in_.system, maxFaceDepth_, level_, position_.slack);
+    FaceResult<S> r;
+    r.certain = solver.solve(point, freeAxes, face, ends, roots, margins_);
+    r.proven = solver.proven();
+    if (m_ > 1) r.degenerate = position_.nearBoundary(roots, box, freeAxes, ends);
+    r.roots = static_cast<int>(roots.size());
+    if (!roots.empty()) {
+      r.degree = faceDegree(in_.system, roots, freeAxes);
+      r.root = roots.front();
+    }
+    return r;
+  }
+
+  /// One pass over the minimal m-faces of the active leaves: the polygons of the crossed ones
+  /// (excluded base cells around a crossed face become touch leaves, walked in turn) and the
+  /// leaves next to a face whose crossings are not proven. Returns the degenerate crossings.
+  std::int64_t crossFaces() {
+    polygons_.clear();
+    rootPoints_.clear();
+    std::int64_t degenerate = 0;
+    std::vector<std::int32_t> corner(n_), position(n_);
+    std::array<Occupant, 4> around;
+    const int quadrants = 1 << k_;
+    const auto faceTypes = static_cast<std::uint64_t>(fixedAxes_.size()) << k_;
+    for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
+      if (!tree_.active(c)) continue;
+      grow();
       bool restricted = false;
-      for (const auto& axes : fixedAxes) {
-        for (int side = 0; side < (1 << k); ++side) {
-          // The face's lowest vertex; faces on the domain boundary have no cells beyond.
+      if (empty_[c] < 0) {
+        empty_[c] = restrictTo(c) ? 1 : 0;
+        restricted = true;
+      }
+      if (empty_[c] == 1) continue;  // no level set between M and M_c meets it
+      const int level = tree_.level(c);
+      // A copy: touch leaves added below may move the tree's index storage.
+      const std::vector<std::int32_t> ci(tree_.index(c).begin(), tree_.index(c).end());
+      for (std::size_t a = 0; a < fixedAxes_.size(); ++a) {
+        const auto& axes = fixedAxes_[a];
+        for (int side = 0; side < quadrants; ++side) {
           std::copy(ci.begin(), ci.end(), corner.begin());
-          bool interior = true;
-          for (int t = 0; t < k; ++t) {
-            corner[axes[t]] += (side >> t) & 1;
-            interior = interior && corner[axes[t]] > 0 && corner[axes[t]] < top;
+          for (int t = 0; t < k_; ++t) corner[axes[t]] += (side >> t) & 1;
+          // The regions around the face in cyclic order (k = 2): (-a,-b), (+a,-b), (+a,+b),
+          // (-a,+b). A finer region means the face is not minimal: its parts belong to the
+          // finer leaves. The face belongs to the first leaf of its own level.
+          bool minimal = true, owner = true;
+          for (int q = 0; q < quadrants && minimal; ++q) {
+            const int bits = k_ == 1 ? q : (q == 0 ? 0 : q == 1 ? 1 : q == 2 ? 3 : 2);
+            std::copy(corner.begin(), corner.end(), position.begin());
+            for (int t = 0; t < k_; ++t) position[axes[t]] += ((bits >> t) & 1) - 1;
+            around[q] = tree_.find(level, position);
+            minimal = around[q].kind != Occ::kFiner;
+            if (around[q].kind == Occ::kLeaf && tree_.level(around[q].leaf) == level &&
+                around[q].leaf < c)
+              owner = false;
           }
-          if (!interior) continue;
-          // The 2^k cells around the face, in cyclic order (k = 2): (-a,-b), (+a,-b), (+a,+b),
-          // (-a,+b). The face belongs to the first of them in the walk: skip it if another
-          // one came earlier (it was solved there).
-          bool owner = true;
-          for (int q = 0; q < (1 << k) && owner; ++q) {
-            const int bits = k == 1 ? q : (q == 0 ? 0 : q == 1 ? 1 : q == 2 ? 3 : 2);
-            std::copy(corner.begin(), corner.end(), index.begin());
-            for (int t = 0; t < k; ++t) index[axes[t]] += ((bits >> t) & 1) - 1;
-            around[q] = grid.pack(index);
-            const auto it = set.lookup.find(around[q]);
-            aroundCell[q] = it == set.lookup.end() ? -1 : it->second;
-            owner = aroundCell[q] < 0 || aroundCell[q] >= static_cast<std::int32_t>(c);
-          }
-          if (!owner) continue;
-          if (!restricted) {
-            const std::vector<Bernstein<S>>& rootPatches = formsFor(ci);
-            for (int i = 0; i < m; ++i) cellPatches[i] = rootPatches[i].restrict(box);
-            restricted = true;
-          }
-          ends.lower.clear();
-          ends.upper.clear();
-          freeAxes.clear();
-          std::vector<S> point(box.lo);
-          for (int j = 0; j < n; ++j) {
-            if (j == axes[0] || j == axes[1]) continue;
-            freeAxes.push_back(j);
-            ends.lower.push_back(ci[j] == 0);
-            ends.upper.push_back(ci[j] + 1 == top);
-          }
-          // Slice the highest fixed axis first so the lower axis numbers stay valid.
-          for (int i = 0; i < m; ++i) {
-            facePatches[i] = cellPatches[i];
-            for (int t = k - 1; t >= 0; --t) {
-              const bool upper = (side >> t) & 1;
-              facePatches[i] = facePatches[i].faceSlice(axes[t], upper);
-              point[axes[t]] = upper ? box.hi[axes[t]] : box.lo[axes[t]];
+          if (!minimal || !owner) continue;
+          const std::uint64_t key =
+              static_cast<std::uint64_t>(c) * faceTypes + (a << k_) + std::uint64_t(side);
+          auto it = faces_.find(key);
+          if (it == faces_.end()) {
+            if (!restricted) {
+              restrictTo(c);
+              restricted = true;
             }
+            it = faces_.emplace(key, solveFace(c, axes, side)).first;
           }
-          roots.clear();
-          const bool certain = solver.solve(point, freeAxes, facePatches, ends, roots);
-          if (m > 1) degenerate += position.nearBoundary(roots, box, freeAxes, ends);
-          if (roots.empty()) continue;
-          const int degree = faceDegree(in.system, roots, freeAxes);
-          if (degree == 0) continue;
-          // A cell around a crossed face that M only touches is added.
-          DualCell dual;
-          for (int q = 0; q < (1 << k); ++q) {
-            if (aroundCell[q] < 0) {
-              aroundCell[q] = static_cast<std::int32_t>(set.size());
-              set.lookup.emplace(around[q], aroundCell[q]);
-              grid.unpack(around[q], index);
-              set.index.insert(set.index.end(), index.begin(), index.end());
-              uncertain.push_back(0);
-            }
-            dual.cells[q] = aroundCell[q];
-          }
-          if (!certain || std::abs(degree) > 1) {
-            for (int q = 0; q < (1 << k); ++q) uncertain[dual.cells[q]] = 1;
-          }
-          for (int copy = 0; copy < std::abs(degree); ++copy) {
-            dual.root = static_cast<std::int32_t>(rootPoints.size() / n);
-            rootPoints.insert(rootPoints.end(), roots.front().begin(), roots.front().end());
-            duals.push_back(dual);
-          }
+          degenerate += addFace(it->second, around);
         }
       }
     }
     return degenerate;
-  };
-
-  // General position: try levels until no crossing is within rounding of a face boundary.
-  ConnectionOutput<S> out;
-  out.complex.n = n;
-  out.complex.k = k;
-  for (int attempt = 0;; ++attempt) {
-    const std::vector<S> level = position.level(attempt);
-    const std::int64_t degenerate = crossFaces(level);
-    out.perturbation.attempts = attempt + 1;
-    out.perturbation.degenerateCrossings = degenerate;
-    out.perturbation.level.clear();
-    if (m > 1) {
-      for (const S& c : level) out.perturbation.level.push_back(toDouble(c));
-    }
-    if (degenerate == 0 || m == 1 || attempt + 1 == GeneralPosition<S>::kAttempts) break;
   }
-  const std::size_t count = set.size();
 
-  // Pieces of M per cell: for k = 2 the link of a cell's vertex (one edge per incident quad,
-  // between the quad's two cells that are face neighbours of the cell) splits into connected
-  // components, one per sheet of M in the cell; each gets its own dual vertex, so two sheets
-  // in one cell do not make a non-manifold vertex. For k = 1 a cell has one piece.
-  std::vector<std::vector<std::int32_t>> incident(count);  // dual cells at each cell
-  for (std::size_t d = 0; d < duals.size(); ++d) {
-    for (int i = 0; i < (k == 1 ? 2 : 4); ++i)
-      incident[duals[d].cells[i]].push_back(std::int32_t(d));
-  }
-  // piece[d * 4 + i]: the piece of cell duals[d].cells[i] that dual cell d belongs to.
-  std::vector<std::int32_t> piece(duals.size() * 4, 0);
-  std::vector<std::int32_t> pieceCount(count, 0);
-  const auto onDomainBoundary = [&](std::size_t c) {
-    const auto ci = set.cell(c);
-    return std::any_of(ci.begin(), ci.end(),
-                       [&](std::int32_t i) { return i == 0 || i + 1 == top; });
-  };
-  const auto slotOf = [&](std::int32_t d, std::size_t c) {
-    int at = 0;
-    while (duals[d].cells[at] != static_cast<std::int32_t>(c)) ++at;
-    return at;
-  };
-  for (std::size_t c = 0; c < count; ++c) {
-    const auto& ds = incident[c];
-    if (ds.empty()) continue;
-    const bool boundary = onDomainBoundary(c);
-    if (k == 1) {
-      pieceCount[c] = 1;
-      for (std::int32_t d : ds) piece[d * 4 + slotOf(d, c)] = 0;
-      const auto degree = ds.size();
-      if (degree != 2 && !(boundary && degree == 1)) ++out.ambiguousCells;
-      continue;
+  /// Records a solved face: flags its leaves when the face is not proven, and adds its
+  /// polygon (|degree| copies) when it is crossed. Returns its degenerate crossings.
+  std::int64_t addFace(const FaceResult<S>& r, std::array<Occupant, 4>& around) {
+    const int quadrants = 1 << k_;
+    const bool unproven = !r.proven || r.roots > 1 || std::abs(r.degree) > 1 || r.degenerate;
+    const bool singular = !r.certain || std::abs(r.degree) > 1;
+    for (int q = 0; q < quadrants; ++q) {
+      if (around[q].kind != Occ::kLeaf) continue;
+      if (unproven) unproven_[around[q].leaf] = 1;
+      if (singular) singular_[around[q].leaf] = 1;
     }
-    // Link nodes: the neighbour cells; link edges: the quads.
-    std::vector<std::int32_t> nodes;
+    if (r.degree == 0) return r.degenerate;
+    Polygon p;
+    for (int q = 0; q < quadrants; ++q) {
+      std::int64_t node = 0;
+      if (around[q].kind == Occ::kEmpty) {
+        // A cell the level set F = c enters where M only touches it: a touch leaf.
+        std::vector<std::int32_t> index(n_);
+        grid_.unpack(around[q].key, index);
+        around[q].kind = Occ::kLeaf;
+        around[q].leaf = tree_.addLeaf(grid_.depth, index, false);
+        grow();
+        if (unproven) unproven_[around[q].leaf] = 1;
+        if (singular) singular_[around[q].leaf] = 1;
+      }
+      if (around[q].kind == Occ::kLeaf) {
+        node = around[q].leaf;
+      } else {
+        node = -1 - static_cast<std::int64_t>(around[q].key);
+        p.outside = true;
+      }
+      if (p.size > 0 && p.node[p.size - 1] == node) continue;
+      p.node[p.size++] = node;
+    }
+    if (p.size > 1 && p.node[p.size - 1] == p.node[0]) --p.size;
+    p.root = static_cast<std::int32_t>(rootPoints_.size() / n_);
+    rootPoints_.insert(rootPoints_.end(), r.root.begin(), r.root.end());
+    for (int copy = 0; copy < std::abs(r.degree); ++copy) polygons_.push_back(p);
+    return r.degenerate;
+  }
+
+  /// Per-leaf arrays follow the tree's growth.
+  void grow() {
+    const std::size_t size = tree_.size();
+    if (empty_.size() >= size) return;
+    empty_.resize(size, -1);
+    bandEmpty_.resize(size, 0);
+    unproven_.resize(size, 0);
+    singular_.resize(size, 0);
+    graph_.resize(size, -1);
+    faceGraph_.resize(size, -1);
+    failure_.resize(size, Failure::kNone);
+  }
+
+  /// The graph test of a leaf's box (cached): M_c ∩ leaf is proven a graph over k of the
+  /// coordinates (J enclosed by the widened derivative hulls of the leaf's patches).
+  bool cellGraph(std::int32_t leaf) {
+    if (graph_[leaf] < 0) {
+      restrictTo(leaf);
+      jacobian_.assign(std::size_t(m_) * n_, Interval<S>());
+      for (int i = 0; i < m_; ++i) {
+        for (int j = 0; j < n_; ++j)
+          jacobian_[std::size_t(i) * n_ + j] = derivativeHull(patches_[i], j, margins_[i]);
+      }
+      std::vector<int> axes(n_);
+      std::iota(axes.begin(), axes.end(), 0);
+      graph_[leaf] = graphTest_.graph(jacobian_, axes);
+    }
+    return graph_[leaf] == 1;
+  }
+
+  /// Whether interval evaluation proves that M_c (with `band`: no level set between M and M_c)
+  /// does not meet `box`; for m = 1, the sign rule's level set F = -delta: F >= 0 or F < 0 on
+  /// the box. Catches what coefficient hulls miss, such as y^2 on a box around y = 0.
+  bool intervalEmpty(const Box<S>& box, bool band) {
+    using I = Interval<S>;
+    std::vector<I> x;
+    for (int j = 0; j < n_; ++j) x.emplace_back(box.lo[j], box.hi[j]);
+    for (int i = 0; i < m_; ++i) {
+      const I f = in_.system.equations()[i].template evaluate<S>(std::span<const I>(x));
+      if (m_ == 1 && (f.lower() >= 0 || f.upper() < 0)) return true;
+      const S c = level_[i];
+      const S lo = band ? std::min<S>(S(0), c) : c, hi = band ? std::max<S>(S(0), c) : c;
+      if (m_ > 1 && (f.lower() > hi || f.upper() < lo)) return true;
+    }
+    return false;
+  }
+
+  /// k = 2: the graph test of every (n-1)-face of a leaf (cached): M_c ∩ face is empty or a
+  /// graph over one coordinate, so no closed curve of M_c lies inside a face.
+  bool facesGraph(std::int32_t leaf) {
+    if (faceGraph_[leaf] < 0) {
+      restrictTo(leaf);
+      bool all = true;
+      std::vector<int> axes;
+      for (int a = 0; a < n_ && all; ++a) {
+        axes.clear();
+        for (int j = 0; j < n_; ++j) {
+          if (j != a) axes.push_back(j);
+        }
+        for (int side = 0; side < 2 && all; ++side) all = faceGraph(a, side == 1, axes);
+      }
+      faceGraph_[leaf] = all;
+    }
+    return faceGraph_[leaf] == 1;
+  }
+
+  /// The graph test of one face of the leaf in patches_ (fixed axis a at its lower or upper
+  /// end): empty, or a graph over one of the free axes.
+  bool faceGraph(int a, bool upper, const std::vector<int>& axes) {
+    jacobian_.assign(std::size_t(m_) * n_, Interval<S>());
+    for (int i = 0; i < m_; ++i) {
+      const Bernstein<S> face = patches_[i].faceSlice(a, upper);
+      if (clearsRange(face, level_[i], level_[i], margins_[i])) return true;
+      for (int j : axes)
+        jacobian_[std::size_t(i) * n_ + j] = derivativeHull(face, j < a ? j : j - 1, margins_[i]);
+    }
+    if (graphTest_.graph(jacobian_, axes)) return true;
+    Box<S> face = patches_.front().domain();
+    face.lo[a] = face.hi[a] = upper ? face.hi[a] : face.lo[a];
+    return intervalEmpty(face, false);
+  }
+
+  /// The certificate of every active leaf (docs/certificate.md) into failure_.
+  void certify() {
+    std::vector<std::vector<std::int32_t>> incident(tree_.size());
+    for (std::size_t p = 0; p < polygons_.size(); ++p) {
+      for (int i = 0; i < polygons_[p].size; ++i) {
+        if (polygons_[p].node[i] >= 0)
+          incident[polygons_[p].node[i]].push_back(static_cast<std::int32_t>(p));
+      }
+    }
+    for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
+      failure_[c] = Failure::kNone;
+      if (!tree_.active(c)) continue;
+      if (empty_[c] == 1) {
+        // M_c misses the leaf; M may not (it lies 1e-8 h away): where it meets the leaf, the
+        // isotopy from M to M_c needs the Jacobian's rank there.
+        if (!bandEmpty_[c] && !cellGraph(c) && !intervalEmpty(leafBox(c), true))
+          failure_[c] = Failure::kGraph;
+        continue;
+      }
+      if (unproven_[c]) {
+        failure_[c] = Failure::kCrossing;
+      } else if (!cellGraph(c) && !intervalEmpty(leafBox(c), true)) {
+        failure_[c] = Failure::kGraph;
+      } else if (k_ == 2 && !facesGraph(c)) {
+        failure_[c] = Failure::kFaceGraph;
+      } else if (!simpleLink(c, incident[c])) {
+        failure_[c] = Failure::kLink;
+      }
+    }
+  }
+
+  /// Whether the crossings on the boundary of leaf c form one simple piece: none, or two
+  /// (k = 1), or one cycle through every neighbour region exactly twice (k = 2; the regions
+  /// beyond the domain are nodes too, so a surface with boundary closes its loop there).
+  bool simpleLink(std::int32_t c, const std::vector<std::int32_t>& polygons) const {
+    if (polygons.empty()) return true;
+    if (k_ == 1) return polygons.size() == 2;
+    std::vector<std::int64_t> nodes;
     std::vector<std::array<int, 2>> edges;
-    for (std::int32_t d : ds) {
-      const int at = slotOf(d, c);
+    for (std::int32_t p : polygons) {
+      const Polygon& poly = polygons_[p];
+      int at = 0;
+      while (poly.node[at] != c) ++at;
       std::array<int, 2> e{};
-      for (int side = 0; side < 2; ++side) {
-        const std::int32_t cell = duals[d].cells[(at + (side ? 3 : 1)) % 4];
-        auto it = std::find(nodes.begin(), nodes.end(), cell);
-        e[side] = static_cast<int>(it - nodes.begin());
-        if (it == nodes.end()) nodes.push_back(cell);
+      for (int s = 0; s < 2; ++s) {
+        const std::int64_t node = poly.node[(at + (s ? poly.size - 1 : 1)) % poly.size];
+        auto it = std::find(nodes.begin(), nodes.end(), node);
+        e[s] = static_cast<int>(it - nodes.begin());
+        if (it == nodes.end()) nodes.push_back(node);
       }
       edges.push_back(e);
     }
     UnionFind uf{std::vector<int>(nodes.size())};
-    for (std::size_t i = 0; i < nodes.size(); ++i) uf.parent[i] = static_cast<int>(i);
+    std::iota(uf.parent.begin(), uf.parent.end(), 0);
+    std::vector<int> degree(nodes.size(), 0);
+    for (const auto& e : edges) {
+      uf.unite(e[0], e[1]);
+      ++degree[e[0]];
+      ++degree[e[1]];
+    }
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      if (degree[i] != 2 || uf.find(int(i)) != uf.find(0)) return false;
+    }
+    return true;
+  }
+
+  /// Crossings, certificates and refinement until every leaf is certified or at the maximum
+  /// level (or the leaf budget is spent). Returns the degenerate crossings of the last pass.
+  std::int64_t refineAndCertify() {
+    tree_ = CellTree(grid_, tree_.maxLevel());
+    for (std::size_t c = 0; c < in_.cells.size(); ++c)
+      tree_.addLeaf(grid_.depth, in_.cells.cell(c), true);
+    tree_.setBaseCells(static_cast<std::int32_t>(in_.cells.size()));
+    faces_.clear();
+    empty_.clear(), bandEmpty_.clear(), unproven_.clear(), singular_.clear(), graph_.clear(),
+        faceGraph_.clear();
+    failure_.clear();
+    refined_ = 0;
+    budgetSpent_ = false;
+    while (true) {
+      std::fill(unproven_.begin(), unproven_.end(), 0);
+      std::fill(singular_.begin(), singular_.end(), 0);
+      const std::int64_t degenerate = crossFaces();
+      grow();
+      certify();
+      // Refine the leaves that fail, above the maximum level.
+      std::vector<std::int32_t> refine;
+      for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
+        if (tree_.active(c) && failure_[c] != Failure::kNone && tree_.level(c) < tree_.maxLevel())
+          refine.push_back(c);
+      }
+      if (refine.empty() || !in_.refine) return degenerate;
+      if (tree_.size() + refine.size() * (std::size_t{1} << n_) > maxLeaves_) {
+        budgetSpent_ = true;
+        return degenerate;
+      }
+      for (std::int32_t c : refine) {
+        const Box<double> box = cellBox(tree_.grid(tree_.level(c)), grid_.domain, tree_.index(c));
+        tree_.refine(c, in_.refine(box));
+        ++refined_;
+      }
+      grow();
+    }
+  }
+
+  /// The topology record from the final tree.
+  void record(TopologyRecord& t, std::int64_t degenerate) const {
+    t.baseLevel = grid_.depth;
+    t.maxDepth = tree_.maxLevel();
+    t.maxLevel = grid_.depth;
+    t.refinedCells = refined_;
+    std::map<std::string, std::int64_t> reasons;
+    for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
+      if (!tree_.active(c)) continue;
+      t.maxLevel = std::max(t.maxLevel, tree_.level(c));
+      if (failure_[c] == Failure::kNone) {
+        ++t.certifiedCells;
+        continue;
+      }
+      ++t.uncertifiedCells;
+      ++reasons[failureName(failure_[c])];
+      UncertifiedCell u;
+      const Box<double> box = cellBox(tree_.grid(tree_.level(c)), grid_.domain, tree_.index(c));
+      u.lo = box.lo;
+      u.hi = box.hi;
+      u.level = tree_.level(c);
+      u.reason = failureName(failure_[c]);
+      t.uncertified.push_back(std::move(u));
+    }
+    std::ostringstream why;
+    if (t.uncertifiedCells > 0) {
+      why << t.uncertifiedCells << " cell" << (t.uncertifiedCells == 1 ? "" : "s")
+          << " uncertified at level " << t.maxDepth << " (";
+      bool first = true;
+      for (const auto& [name, count] : reasons) {
+        why << (first ? "" : ", ") << name << ": " << count;
+        first = false;
+      }
+      why << ")";
+      if (budgetSpent_) why << "; refinement stopped at " << maxLeaves_ << " leaves";
+    } else if (degenerate > 0) {
+      why << degenerate << " crossings within rounding of a face boundary";
+    }
+    t.reason = why.str();
+    t.certified = t.reason.empty();
+  }
+
+  /// The dual complex of the final tree (docs/crossing.md, steps 3 and 4), on the polygons
+  /// that lie inside the domain.
+  void buildComplex(ConnectionOutput<S>& out) {
+    const std::size_t count = tree_.size();
+    std::vector<std::int32_t> mesh;
+    for (std::size_t p = 0; p < polygons_.size(); ++p) {
+      if (!polygons_[p].outside) mesh.push_back(static_cast<std::int32_t>(p));
+    }
+    std::vector<std::vector<std::int32_t>> incident(count);
+    for (std::int32_t p : mesh) {
+      for (int i = 0; i < polygons_[p].size; ++i) incident[polygons_[p].node[i]].push_back(p);
+    }
+    const auto slotOf = [&](std::int32_t p, std::size_t c) {
+      int at = 0;
+      while (polygons_[p].node[at] != static_cast<std::int64_t>(c)) ++at;
+      return at;
+    };
+    // piece[p * 4 + i]: the piece of M in leaf node[i] that polygon p belongs to.
+    std::vector<std::int32_t> piece(polygons_.size() * 4, 0), pieceCount(count, 0);
+    for (std::size_t c = 0; c < count; ++c)
+      pieceCount[c] = pieces(c, incident[c], piece, slotOf, out);
+    // Dual vertices: the Newton projection of the mean of each piece's crossings.
+    std::vector<std::int32_t> firstVertex(count, -1);
+    std::vector<S> sums, x(n_);
+    std::vector<std::int32_t> counts;
+    for (std::size_t c = 0; c < count; ++c) {
+      if (pieceCount[c] == 0) continue;
+      const S width = S(tree_.grid(tree_.level(c)).cellWidth(0));
+      sums.assign(std::size_t(pieceCount[c]) * n_, S(0));
+      counts.assign(pieceCount[c], 0);
+      for (std::int32_t p : incident[c]) {
+        const std::int32_t q = piece[p * 4 + slotOf(p, c)];
+        for (int j = 0; j < n_; ++j)
+          sums[std::size_t(q) * n_ + j] += rootPoints_[std::size_t(polygons_[p].root) * n_ + j];
+        ++counts[q];
+      }
+      for (int q = 0; q < pieceCount[c]; ++q) {
+        for (int j = 0; j < n_; ++j) x[j] = sums[std::size_t(q) * n_ + j] / counts[q];
+        const std::vector<S> mean = x;
+        if (!in_.project(x).converged) {
+          // Reported, never written silently off M (the analysis measures its residual too).
+          x = mean;
+          ++out.offManifoldVertices;
+        }
+        const std::int32_t v = out.complex.addVertex(x, tree_.baseCell(std::int32_t(c)));
+        if (q == 0) firstVertex[c] = v;
+        // Singular cells: the Jacobian at the vertex is (nearly) rank-deficient relative to
+        // the cell size, as at self-intersections and cone points.
+        const Vector<S> sigma = singularValuesAt<S>(in_.system, x);
+        if (q == 0 && (singular_[c] || sigma(0) == 0 || sigma(m_ - 1) <= sigma(0) * width * 1e-3))
+          ++out.singularCells;
+      }
+    }
+    for (std::int32_t p : mesh) addSimplices(polygons_[p], p, firstVertex, piece, out);
+  }
+
+  /// The pieces of M in leaf c: for k = 2 the components of the link of its vertex (one edge
+  /// per incident polygon, between the polygon's two nodes next to c), one per sheet of M in
+  /// the leaf; for k = 1 one. Counts the leaves whose piece is not simple.
+  template <class SlotOf>
+  std::int32_t pieces(std::size_t c, const std::vector<std::int32_t>& ps,
+                      std::vector<std::int32_t>& piece, const SlotOf& slotOf,
+                      ConnectionOutput<S>& out) const {
+    if (ps.empty()) return 0;
+    const auto ci = tree_.index(std::int32_t(c));
+    const std::int64_t top = tree_.grid(tree_.level(std::int32_t(c))).cellsPerAxis();
+    const bool boundary =
+        std::any_of(ci.begin(), ci.end(), [&](std::int32_t i) { return i == 0 || i + 1 == top; });
+    if (k_ == 1) {
+      for (std::int32_t p : ps) piece[p * 4 + slotOf(p, c)] = 0;
+      if (ps.size() != 2 && !(boundary && ps.size() == 1)) ++out.ambiguousCells;
+      return 1;
+    }
+    std::vector<std::int64_t> nodes;
+    std::vector<std::array<int, 2>> edges;
+    for (std::int32_t p : ps) {
+      const Polygon& poly = polygons_[p];
+      const int at = slotOf(p, c);
+      std::array<int, 2> e{};
+      for (int s = 0; s < 2; ++s) {
+        const std::int64_t node = poly.node[(at + (s ? poly.size - 1 : 1)) % poly.size];
+        auto it = std::find(nodes.begin(), nodes.end(), node);
+        e[s] = static_cast<int>(it - nodes.begin());
+        if (it == nodes.end()) nodes.push_back(node);
+      }
+      edges.push_back(e);
+    }
+    UnionFind uf{std::vector<int>(nodes.size())};
+    std::iota(uf.parent.begin(), uf.parent.end(), 0);
     for (const auto& e : edges) uf.unite(e[0], e[1]);
     std::vector<int> componentOf(nodes.size(), -1), degree(nodes.size(), 0);
     int components = 0;
@@ -759,10 +1205,8 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
       if (componentOf[r] < 0) componentOf[r] = components++;
     }
     for (const auto& e : edges) ++degree[e[0]], ++degree[e[1]];
-    for (std::size_t q = 0; q < ds.size(); ++q) {
-      piece[ds[q] * 4 + slotOf(ds[q], c)] = componentOf[uf.find(edges[q][0])];
-    }
-    pieceCount[c] = components;
+    for (std::size_t q = 0; q < ps.size(); ++q)
+      piece[ps[q] * 4 + slotOf(ps[q], c)] = componentOf[uf.find(edges[q][0])];
     // One simple piece: one component that is a cycle (or a path on the domain boundary).
     int ends = 0;
     bool simple = components == 1;
@@ -772,62 +1216,32 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
     }
     simple = simple && (ends == 0 || (boundary && ends == 2));
     if (!simple) ++out.ambiguousCells;
+    return components;
   }
 
-  // Dual vertices: the Newton projection of the mean of each piece's crossings.
-  std::vector<std::int32_t> firstVertex(count, -1);
-  std::vector<S> sums, x(n);
-  std::vector<std::int32_t> counts;
-  const S widest = S(grid.cellWidth(0));
-  for (std::size_t c = 0; c < count; ++c) {
-    if (pieceCount[c] == 0) continue;
-    sums.assign(std::size_t(pieceCount[c]) * n, S(0));
-    counts.assign(pieceCount[c], 0);
-    for (std::int32_t d : incident[c]) {
-      const std::int32_t p = piece[d * 4 + slotOf(d, c)];
-      for (int j = 0; j < n; ++j)
-        sums[std::size_t(p) * n + j] += rootPoints[std::size_t(duals[d].root) * n + j];
-      ++counts[p];
-    }
-    for (int p = 0; p < pieceCount[c]; ++p) {
-      for (int j = 0; j < n; ++j) x[j] = sums[std::size_t(p) * n + j] / counts[p];
-      const std::vector<S> mean = x;
-      if (!in.project(x).converged) {
-        // Reported, never written silently off M (the analysis measures its residual too).
-        x = mean;
-        ++out.offManifoldVertices;
-      }
-      const std::int32_t v = out.complex.addVertex(
-          x, c < cells.size() ? static_cast<std::int32_t>(c) : std::int32_t{-1});
-      if (p == 0) firstVertex[c] = v;
-      // Singular cells: the Jacobian at the vertex is (nearly) rank-deficient relative to the
-      // cell size, as at self-intersections and cone points.
-      const Vector<S> sigma = singularValuesAt<S>(in.system, x);
-      if (p == 0 && (uncertain[c] || sigma(0) == 0 || sigma(m - 1) <= sigma(0) * widest * 1e-3)) {
-        ++out.singularCells;
-      }
-    }
-  }
-
-  // Dual k-cells on the pieces' vertices.
-  for (std::size_t d = 0; d < duals.size(); ++d) {
-    const DualCell& dual = duals[d];
+  /// The simplices of one mesh polygon: an edge (k = 1), a triangle, or a quad split along its
+  /// shorter diagonal.
+  void addSimplices(const Polygon& poly, std::int32_t p, const std::vector<std::int32_t>& first,
+                    const std::vector<std::int32_t>& piece, ConnectionOutput<S>& out) const {
     std::array<std::int32_t, 4> v{};
-    for (int i = 0; i < (k == 1 ? 2 : 4); ++i) v[i] = firstVertex[dual.cells[i]] + piece[d * 4 + i];
-    if (k == 1) {
+    for (int i = 0; i < poly.size; ++i) v[i] = first[poly.node[i]] + piece[p * 4 + i];
+    if (k_ == 1) {
       out.complex.addSimplex(std::array<std::int32_t, 2>{v[0], v[1]});
-      continue;
+      return;
     }
-    const auto distance = [&](int p, int q) {
+    if (poly.size == 3) {
+      out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[1], v[2]});
+      return;
+    }
+    const auto distance = [&](int a, int b) {
       S sum = 0;
-      for (int j = 0; j < n; ++j) {
-        const S diff = out.complex.vertices[std::size_t(v[p]) * n + j] -
-                       out.complex.vertices[std::size_t(v[q]) * n + j];
+      for (int j = 0; j < n_; ++j) {
+        const S diff = out.complex.vertices[std::size_t(v[a]) * n_ + j] -
+                       out.complex.vertices[std::size_t(v[b]) * n_ + j];
         sum += diff * diff;
       }
       return sum;
     };
-    // Split the quad along its shorter diagonal.
     if (distance(0, 2) <= distance(1, 3)) {
       out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[1], v[2]});
       out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[2], v[3]});
@@ -836,7 +1250,43 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
       out.complex.addSimplex(std::array<std::int32_t, 3>{v[1], v[2], v[3]});
     }
   }
-  return out;
+
+  const ConnectionInput<S>& in_;
+  const Grid& grid_;
+  int n_, k_, m_, maxFaceDepth_;
+  Box<S> domain_;
+  const GeneralPosition<S> position_;
+  GraphTest<S> graphTest_;
+  std::vector<Interval<S>> jacobian_;  ///< m x n enclosure for the graph tests
+  CellTree tree_;
+  std::vector<std::array<int, 2>> fixedAxes_;  ///< the k fixed axes of each kind of m-face
+  std::vector<S> level_;                       ///< c of the current attempt
+  std::map<CellKey, RootForms> rootForms_;
+  std::vector<Bernstein<S>> patches_;  ///< the current leaf's patches
+  std::vector<S> margins_;
+  std::unordered_map<std::uint64_t, FaceResult<S>> faces_;
+  std::vector<Polygon> polygons_;
+  std::vector<S> rootPoints_;
+  // Per leaf: proven empty (-1 unknown), next to an unproven face, next to an undecided face,
+  // graph tests (-1 unknown), and the certificate's failure.
+  std::vector<std::int8_t> empty_, bandEmpty_;
+  std::vector<std::uint8_t> unproven_, singular_;
+  std::vector<std::int8_t> graph_, faceGraph_;
+  std::vector<Failure> failure_;
+  std::int64_t refined_ = 0;
+  std::size_t maxLeaves_ = 0;
+  bool budgetSpent_ = false;
+};
+
+}  // namespace
+
+template <class S>
+ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) const {
+  if (in.k != 1 && in.k != 2) {
+    throw InputError("connection 'crossing' supports k = 1 and k = 2, not k = " +
+                     std::to_string(in.k));
+  }
+  return AdaptiveCrossing<S>(in, maxFaceDepth).run();
 }
 
 template ConnectionOutput<double> CrossingConnection::connect(const ConnectionInput<double>&) const;

@@ -1,0 +1,85 @@
+#include "strategies/connection/cell_tree.hpp"
+
+#include <stdexcept>
+
+namespace ndc {
+
+CellTree::CellTree(const Grid& base, int maxLevel)
+    : n_(base.n), base_(base.depth), maxLevel_(std::max(maxLevel, base.depth)) {
+  if (!Grid::fits(n_, maxLevel_))
+    throw std::invalid_argument("CellTree: level " + std::to_string(maxLevel_) +
+                                " does not fit a cell key");
+  for (int level = base_; level <= maxLevel_; ++level) {
+    Grid g = base;
+    g.depth = level;
+    grids_.push_back(g);
+  }
+  leaves_.resize(grids_.size());
+  internal_.resize(grids_.size());
+}
+
+std::int32_t CellTree::addLeaf(int level, std::span<const std::int32_t> index, bool solution) {
+  const auto leaf = static_cast<std::int32_t>(level_.size());
+  leaves_[level - base_].emplace(grid(level).pack(index), leaf);
+  level_.push_back(static_cast<std::int8_t>(level));
+  index_.insert(index_.end(), index.begin(), index.end());
+  active_.push_back(1);
+  solution_.push_back(solution ? 1 : 0);
+  return leaf;
+}
+
+std::int32_t CellTree::refine(std::int32_t leaf, const std::vector<std::uint8_t>& solution) {
+  const int level = level_[leaf];
+  if (level >= maxLevel_) throw std::logic_error("CellTree::refine: at the maximum level");
+  const CellKey key = grid(level).pack(index(leaf));
+  leaves_[level - base_].erase(key);
+  internal_[level - base_].insert(key);
+  active_[leaf] = 0;
+  const std::vector<std::int32_t> parent(index(leaf).begin(), index(leaf).end());
+  std::vector<std::int32_t> child(n_);
+  const auto first = static_cast<std::int32_t>(level_.size());
+  for (std::size_t c = 0; c < solution.size(); ++c) {
+    for (int j = 0; j < n_; ++j) child[j] = 2 * parent[j] + static_cast<std::int32_t>((c >> j) & 1);
+    addLeaf(level + 1, child, solution[c] != 0);
+  }
+  return first;
+}
+
+Occupant CellTree::find(int level, std::span<const std::int32_t> index) const {
+  Occupant out;
+  const std::int64_t top = grid(level).cellsPerAxis();
+  CellKey outside = 0;
+  for (int j = 0; j < n_; ++j) {
+    if (index[j] < 0) outside |= CellKey{1} << (2 * j);
+    if (index[j] >= top) outside |= CellKey{2} << (2 * j);
+  }
+  if (outside) {
+    out.kind = Occupant::Kind::kOutside;
+    out.key = outside;
+    return out;
+  }
+  // From the base level down: the first leaf met holds the region; a level where the cell is
+  // neither a leaf nor internal is a region the subdivision excluded.
+  thread_local std::vector<std::int32_t> at;
+  at.assign(index.begin(), index.end());
+  for (int l = base_; l <= level; ++l) {
+    for (int j = 0; j < n_; ++j) at[j] = index[j] >> (level - l);
+    const CellKey key = grid(l).pack(at);
+    const auto it = leaves_[l - base_].find(key);
+    if (it != leaves_[l - base_].end()) {
+      out.kind = Occupant::Kind::kLeaf;
+      out.leaf = it->second;
+      return out;
+    }
+    if (!internal_[l - base_].count(key)) {
+      out.kind = Occupant::Kind::kEmpty;
+      out.key = key;
+      if (l != base_) throw std::logic_error("CellTree::find: a refined cell lost a child");
+      return out;
+    }
+  }
+  out.kind = Occupant::Kind::kFiner;
+  return out;
+}
+
+}  // namespace ndc

@@ -1,0 +1,76 @@
+/// \file cell_tree.hpp
+/// The adaptive 2^n-tree of the crossing connection (docs/certificate.md): the solution cells of
+/// the base grid as leaves, refined where a cell's topology certificate fails.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include "framework/grid.hpp"
+
+namespace ndc {
+
+/// What occupies the region next to a face: a leaf of the tree, finer leaves (the face is not
+/// minimal), the outside of the domain, or a base cell the subdivision excluded (no leaf).
+struct Occupant {
+  enum class Kind { kLeaf, kFiner, kOutside, kEmpty };
+  Kind kind = Kind::kEmpty;
+  std::int32_t leaf = -1;  ///< kLeaf: the leaf
+  /// kOutside: which axes the region lies beyond (2 bits per axis: 1 below, 2 above);
+  /// kEmpty: the packed index of the excluded base cell.
+  CellKey key = 0;
+};
+
+/// A 2^n-tree over the grid of `base` depth, refined down to at most `maxLevel`. Leaves are never
+/// removed: a refined leaf becomes inactive, an internal node, and its 2^n children become
+/// leaves (those the bounding excludes too, flagged as not solution cells), so every region
+/// below a refined cell is a leaf and lookups need no search. Leaf numbers are stable.
+class CellTree {
+ public:
+  CellTree(const Grid& base, int maxLevel);
+
+  int n() const { return n_; }
+  int baseLevel() const { return base_; }
+  int maxLevel() const { return maxLevel_; }
+  /// The grid of level `level` (same domain, 2^level cells per axis).
+  const Grid& grid(int level) const { return grids_[level - base_]; }
+
+  /// Adds a leaf (its key must be new at its level); returns its number.
+  std::int32_t addLeaf(int level, std::span<const std::int32_t> index, bool solution);
+  /// Refines an active leaf: it becomes internal; `solution[c]` says whether child c (bit j:
+  /// upper half of axis j) may hold M. Returns the first child's number (children follow).
+  std::int32_t refine(std::int32_t leaf, const std::vector<std::uint8_t>& solution);
+
+  /// The region at `index` of level `level` (the index may lie outside the grid).
+  Occupant find(int level, std::span<const std::int32_t> index) const;
+
+  std::size_t size() const { return level_.size(); }
+  int level(std::int32_t leaf) const { return level_[leaf]; }
+  std::span<const std::int32_t> index(std::int32_t leaf) const {
+    return {index_.data() + std::size_t(leaf) * n_, static_cast<std::size_t>(n_)};
+  }
+  bool active(std::int32_t leaf) const { return active_[leaf] != 0; }
+  /// Whether the bounding could not exclude the leaf (a solution cell); touch cells and
+  /// excluded children are not.
+  bool solution(std::int32_t leaf) const { return solution_[leaf] != 0; }
+  /// The solution-cell number of a base leaf (its number in the pipeline's cells), else -1.
+  std::int32_t baseCell(std::int32_t leaf) const {
+    return leaf < baseCells_ && level_[leaf] == base_ ? leaf : -1;
+  }
+  void setBaseCells(std::int32_t count) { baseCells_ = count; }
+
+ private:
+  int n_, base_, maxLevel_;
+  std::vector<Grid> grids_;
+  std::vector<std::unordered_map<CellKey, std::int32_t>> leaves_;  // per level - base
+  std::vector<std::unordered_set<CellKey>> internal_;              // per level - base
+  std::vector<std::int8_t> level_;
+  std::vector<std::int32_t> index_;
+  std::vector<std::uint8_t> active_, solution_;
+  std::int32_t baseCells_ = 0;
+};
+
+}  // namespace ndc

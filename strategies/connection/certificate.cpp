@@ -1,0 +1,108 @@
+#include "strategies/connection/certificate.hpp"
+
+#include <Eigen/Dense>
+#include <boost/multiprecision/eigen.hpp>
+
+#include <algorithm>
+#include <numeric>
+
+namespace ndc {
+
+template <class S>
+Interval<S> derivativeHull(const Bernstein<S>& p, int axis, const S& margin) {
+  using I = Interval<S>;
+  const int d = p.degree(axis);
+  if (d == 0) return I(S(0));
+  const std::size_t stride = p.stride(axis), size = p.size();
+  const auto c = p.coefficients();
+  S lo = 0, hi = 0;
+  bool first = true;
+  for (std::size_t i = 0; i < size; ++i) {
+    if ((i / stride) % std::size_t(d + 1) == std::size_t(d)) continue;  // last along the axis
+    const S diff = c[i + stride] - c[i];
+    if (first || diff < lo) lo = diff;
+    if (first || diff > hi) hi = diff;
+    first = false;
+  }
+  // Two coefficient errors, and the rounding of the difference itself (below one margin).
+  const S widen = 3 * margin;
+  const Box<S>& box = p.domain();
+  return (I(lo - widen, hi + widen) * I(S(d))).dividedBy(box.hi[axis] - box.lo[axis]);
+}
+
+template <class S>
+bool clearsRange(const Bernstein<S>& p, const S& a, const S& b, const S& margin) {
+  const auto [lo, hi] = p.coefficientRange();
+  return lo > b + margin || hi < a - margin;
+}
+
+template <class S>
+bool GraphTest<S>::graph(std::span<const Interval<S>> jacobian, std::span<const int> axes) {
+  const int a = static_cast<int>(axes.size());
+  if (a < m_) return false;
+  // The m pivot columns of the midpoint Jacobian first: the best conditioned block.
+  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+  Matrix mid(m_, a);
+  for (int i = 0; i < m_; ++i) {
+    for (int t = 0; t < a; ++t) mid(i, t) = jacobian[std::size_t(i) * n_ + axes[t]].midpoint();
+  }
+  const Eigen::ColPivHouseholderQR<Matrix> qr(mid);
+  std::vector<int> columns;
+  for (int t = 0; t < m_; ++t) columns.push_back(axes[qr.colsPermutation().indices()(t)]);
+  if (regular(jacobian, columns)) return true;
+  // Every other block: choose which a - m axes to drop.
+  const int drop = a - m_;
+  std::vector<int> pick(drop);
+  std::iota(pick.begin(), pick.end(), 0);
+  while (true) {
+    columns.clear();
+    for (int t = 0; t < a; ++t) {
+      if (std::find(pick.begin(), pick.end(), t) == pick.end()) columns.push_back(axes[t]);
+    }
+    if (regular(jacobian, columns)) return true;
+    int p = drop - 1;  // the next combination of `drop` out of `a`
+    while (p >= 0 && pick[p] == a - drop + p) --p;
+    if (p < 0) return false;
+    ++pick[p];
+    for (int q = p + 1; q < drop; ++q) pick[q] = pick[q - 1] + 1;
+  }
+}
+
+template <class S>
+bool GraphTest<S>::regular(std::span<const Interval<S>> jacobian,
+                           std::span<const int> columns) const {
+  using I = Interval<S>;
+  const auto entry = [&](int i, int t) -> const I& {
+    return jacobian[std::size_t(i) * n_ + columns[t]];
+  };
+  if (m_ == 1) return !entry(0, 0).containsZero();
+  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+  Matrix mid(m_, m_);
+  for (int i = 0; i < m_; ++i) {
+    for (int t = 0; t < m_; ++t) mid(i, t) = entry(i, t).midpoint();
+  }
+  const Eigen::FullPivLU<Matrix> lu(mid);
+  if (lu.rank() < m_) return false;
+  const Matrix y = lu.inverse();
+  // || I - Y A ||_inf < 1, every entry enclosed with outward rounding.
+  for (int i = 0; i < m_; ++i) {
+    I row(S(0));
+    for (int j = 0; j < m_; ++j) {
+      I r(S(i == j ? 1 : 0));
+      for (int l = 0; l < m_; ++l) r -= I(y(i, l)) * entry(l, j);
+      using std::abs;
+      row += I(std::max<S>(abs(r.lower()), abs(r.upper())));
+    }
+    if (!(row.upper() < 1)) return false;
+  }
+  return true;
+}
+
+template Interval<double> derivativeHull(const Bernstein<double>&, int, const double&);
+template Interval<Mpfr> derivativeHull(const Bernstein<Mpfr>&, int, const Mpfr&);
+template bool clearsRange(const Bernstein<double>&, const double&, const double&, const double&);
+template bool clearsRange(const Bernstein<Mpfr>&, const Mpfr&, const Mpfr&, const Mpfr&);
+template class GraphTest<double>;
+template class GraphTest<Mpfr>;
+
+}  // namespace ndc

@@ -1,0 +1,58 @@
+/// \file certificate.hpp
+/// The cell test of the topology certificate (docs/certificate.md): over a whole box, either M
+/// does not meet the box, or M ∩ box is the graph of a function of the remaining coordinates.
+/// Every enclosure here is rigorous: Bernstein coefficient hulls widened by the rounding margin
+/// of the coefficients, and outward-rounded interval arithmetic.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "framework/bernstein.hpp"
+#include "framework/interval.hpp"
+
+namespace ndc {
+
+/// An enclosure of the partial derivative of `p` along variable `axis` over p's box: the hull of
+/// the derivative's Bernstein coefficients `d / w (b_{i+1} - b_i)`, widened so that it holds for
+/// the exact polynomial when every coefficient of `p` is within `margin` of the exact one.
+template <class S>
+Interval<S> derivativeHull(const Bernstein<S>& p, int axis, const S& margin);
+
+/// Whether the coefficients of `p` prove that p has no value between `a` and `b` (a <= b) on
+/// its box: all above b + margin, or all below a - margin.
+template <class S>
+bool clearsRange(const Bernstein<S>& p, const S& a, const S& b, const S& margin);
+
+/// The graph test (Elber and Kim's normal-cone test in its interval form). Given an enclosure J
+/// of the m x n Jacobian of F over a box, if the m columns B of J form an interval matrix whose
+/// every member is regular, then F(x_B, x_K) = c has at most one solution x_B in the box for
+/// every x_K (mean value theorem: F(y) - F(x) = A (y - x) with A in the hull), so M_c ∩ box is
+/// the graph of a function of the other coordinates x_K, for every level c at once. Regularity
+/// is proven by the preconditioned test ||I - Y A||_inf < 1 in interval arithmetic, Y the
+/// inverse of the midpoint matrix.
+template <class S>
+class GraphTest {
+ public:
+  GraphTest(int n, int m) : n_(n), m_(m) {}
+
+  /// Whether some m of the columns `axes` of `jacobian` (m x n, row-major) form a regular
+  /// block. Tries the pivot columns of the midpoint matrix first, then every other choice
+  /// (at most C(a, a - m) with a - m <= 2).
+  bool graph(std::span<const Interval<S>> jacobian, std::span<const int> axes);
+
+ private:
+  bool regular(std::span<const Interval<S>> jacobian, std::span<const int> columns) const;
+
+  int n_, m_;
+};
+
+extern template Interval<double> derivativeHull(const Bernstein<double>&, int, const double&);
+extern template Interval<Mpfr> derivativeHull(const Bernstein<Mpfr>&, int, const Mpfr&);
+extern template bool clearsRange(const Bernstein<double>&, const double&, const double&,
+                                 const double&);
+extern template bool clearsRange(const Bernstein<Mpfr>&, const Mpfr&, const Mpfr&, const Mpfr&);
+extern template class GraphTest<double>;
+extern template class GraphTest<Mpfr>;
+
+}  // namespace ndc
