@@ -992,15 +992,12 @@ class AdaptiveCrossing {
     }
   }
 
-  /// Whether the crossings on the boundary of leaf c form one simple piece: none, or two
-  /// (k = 1), or one cycle through every neighbour region exactly twice (k = 2; the regions
-  /// beyond the domain are nodes too, so a surface with boundary closes its loop there).
-  bool simpleLink(std::int32_t c, const std::vector<std::int32_t>& polygons) const {
-    if (polygons.empty()) return true;
-    if (k_ == 1) return polygons.size() == 2;
-    std::vector<std::int64_t> nodes;
+  /// The link of leaf c (k = 2): one edge per polygon, between the polygon's two nodes next to
+  /// c; `nodes` receives the distinct neighbour nodes the edges number.
+  std::vector<std::array<int, 2>> linkEdges(std::int64_t c, const std::vector<std::int32_t>& ps,
+                                            std::vector<std::int64_t>& nodes) const {
     std::vector<std::array<int, 2>> edges;
-    for (std::int32_t p : polygons) {
+    for (std::int32_t p : ps) {
       const Polygon& poly = polygons_[p];
       int at = 0;
       while (poly.node[at] != c) ++at;
@@ -1013,6 +1010,17 @@ class AdaptiveCrossing {
       }
       edges.push_back(e);
     }
+    return edges;
+  }
+
+  /// Whether the crossings on the boundary of leaf c form one simple piece: none, or two
+  /// (k = 1), or one cycle through every neighbour region exactly twice (k = 2; the regions
+  /// beyond the domain are nodes too, so a surface with boundary closes its loop there).
+  bool simpleLink(std::int32_t c, const std::vector<std::int32_t>& polygons) const {
+    if (polygons.empty()) return true;
+    if (k_ == 1) return polygons.size() == 2;
+    std::vector<std::int64_t> nodes;
+    const std::vector<std::array<int, 2>> edges = linkEdges(c, polygons, nodes);
     UnionFind uf{std::vector<int>(nodes.size())};
     std::iota(uf.parent.begin(), uf.parent.end(), 0);
     std::vector<int> degree(nodes.size(), 0);
@@ -1182,19 +1190,8 @@ class AdaptiveCrossing {
       return 1;
     }
     std::vector<std::int64_t> nodes;
-    std::vector<std::array<int, 2>> edges;
-    for (std::int32_t p : ps) {
-      const Polygon& poly = polygons_[p];
-      const int at = slotOf(p, c);
-      std::array<int, 2> e{};
-      for (int s = 0; s < 2; ++s) {
-        const std::int64_t node = poly.node[(at + (s ? poly.size - 1 : 1)) % poly.size];
-        auto it = std::find(nodes.begin(), nodes.end(), node);
-        e[s] = static_cast<int>(it - nodes.begin());
-        if (it == nodes.end()) nodes.push_back(node);
-      }
-      edges.push_back(e);
-    }
+    const std::vector<std::array<int, 2>> edges =
+        linkEdges(static_cast<std::int64_t>(c), ps, nodes);
     UnionFind uf{std::vector<int>(nodes.size())};
     std::iota(uf.parent.begin(), uf.parent.end(), 0);
     for (const auto& e : edges) uf.unite(e[0], e[1]);
