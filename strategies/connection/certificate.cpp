@@ -37,6 +37,42 @@ bool clearsRange(const Bernstein<S>& p, const S& a, const S& b, const S& margin)
 }
 
 template <class S>
+bool combinationExcludes(const System<S>& system, std::span<const S> level, const Box<S>& box,
+                         std::span<const Interval<S>> jacobian, std::span<const int> axes) {
+  using I = Interval<S>;
+  const int m = system.m(), n = system.n(), a = static_cast<int>(axes.size());
+  // lambda: the direction of the normal space most nearly orthogonal to the box's free axes.
+  Eigen::MatrixXd mid(m, a);
+  for (int i = 0; i < m; ++i) {
+    for (int t = 0; t < a; ++t)
+      mid(i, t) = toDouble(jacobian[std::size_t(i) * n + axes[t]].midpoint());
+  }
+  Eigen::VectorXd lambda = Eigen::VectorXd::Ones(m);
+  if (m > 1)
+    lambda = Eigen::JacobiSVD<Eigen::MatrixXd>(mid, Eigen::ComputeFullU).matrixU().col(m - 1);
+  if (!lambda.allFinite()) return false;
+  // g(x0) at the box's midpoint, in point intervals.
+  std::vector<I> x0;
+  for (int j = 0; j < n; ++j) x0.emplace_back((box.lo[j] + box.hi[j]) / 2);
+  I g(S(0));
+  for (int i = 0; i < m; ++i) {
+    if (lambda(i) == 0) continue;
+    g += I(S(lambda(i))) *
+         (system.equations()[i].template evaluate<S>(std::span<const I>(x0)) - I(level[i]));
+  }
+  // Plus the enclosure of the first-order change along each free axis.
+  for (int j : axes) {
+    I slope(S(0));
+    for (int i = 0; i < m; ++i) slope += I(S(lambda(i))) * jacobian[std::size_t(i) * n + j];
+    I step(box.lo[j], box.hi[j]);
+    step -= x0[j];
+    slope *= step;
+    g += slope;
+  }
+  return !g.containsZero();
+}
+
+template <class S>
 bool GraphTest<S>::graph(std::span<const Interval<S>> jacobian, std::span<const int> axes) {
   const int a = static_cast<int>(axes.size());
   if (a < m_) return false;
@@ -102,6 +138,11 @@ template Interval<double> derivativeHull(const Bernstein<double>&, int, const do
 template Interval<Mpfr> derivativeHull(const Bernstein<Mpfr>&, int, const Mpfr&);
 template bool clearsRange(const Bernstein<double>&, const double&, const double&, const double&);
 template bool clearsRange(const Bernstein<Mpfr>&, const Mpfr&, const Mpfr&, const Mpfr&);
+template bool combinationExcludes(const System<double>&, std::span<const double>,
+                                  const Box<double>&, std::span<const Interval<double>>,
+                                  std::span<const int>);
+template bool combinationExcludes(const System<Mpfr>&, std::span<const Mpfr>, const Box<Mpfr>&,
+                                  std::span<const Interval<Mpfr>>, std::span<const int>);
 template class GraphTest<double>;
 template class GraphTest<Mpfr>;
 

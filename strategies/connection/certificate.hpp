@@ -10,6 +10,7 @@
 
 #include "framework/bernstein.hpp"
 #include "framework/interval.hpp"
+#include "framework/system.hpp"
 
 namespace ndc {
 
@@ -47,11 +48,30 @@ class GraphTest {
   int n_, m_;
 };
 
+/// Whether one combination g = lambda . (F - c) of the equations is proven nonzero on `box`, so
+/// that the level set F = c does not meet it. Where M is nearly tangent to the box (a face
+/// near a critical point of a coordinate on M), every single equation vanishes somewhere on
+/// the box although their common zeros miss it; lambda, the left singular vector of the
+/// smallest singular value of the midpoint Jacobian over `axes`, cancels the first-order change
+/// of F along the box, and the mean value form g(box) in g(x0) + sum_j [dg/dx_j](box) (x_j - x0_j)
+/// then decides with an error of second order. `jacobian` (m x n, row-major) encloses the
+/// Jacobian of F over the box in the columns `axes` (the box's other axes are points). Every
+/// step is outward rounded; lambda itself needs no accuracy.
+template <class S>
+bool combinationExcludes(const System<S>& system, std::span<const S> level, const Box<S>& box,
+                         std::span<const Interval<S>> jacobian, std::span<const int> axes);
+
 extern template Interval<double> derivativeHull(const Bernstein<double>&, int, const double&);
 extern template Interval<Mpfr> derivativeHull(const Bernstein<Mpfr>&, int, const Mpfr&);
 extern template bool clearsRange(const Bernstein<double>&, const double&, const double&,
                                  const double&);
 extern template bool clearsRange(const Bernstein<Mpfr>&, const Mpfr&, const Mpfr&, const Mpfr&);
+extern template bool combinationExcludes(const System<double>&, std::span<const double>,
+                                         const Box<double>&, std::span<const Interval<double>>,
+                                         std::span<const int>);
+extern template bool combinationExcludes(const System<Mpfr>&, std::span<const Mpfr>,
+                                         const Box<Mpfr>&, std::span<const Interval<Mpfr>>,
+                                         std::span<const int>);
 extern template class GraphTest<double>;
 extern template class GraphTest<Mpfr>;
 

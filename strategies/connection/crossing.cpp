@@ -958,7 +958,11 @@ class AdaptiveCrossing {
     if (graphTest_.graph(jacobian_, axes)) return true;
     Box<S> face = patches_.front().domain();
     face.lo[a] = face.hi[a] = upper ? face.hi[a] : face.lo[a];
-    return intervalEmpty(face, false);
+    // Near a point where M is tangent to the face's hyperplane no block is regular, and M
+    // usually misses the face although each equation alone meets it.
+    return combinationExcludes(in_.system, std::span<const S>(level_), face,
+                               std::span<const Interval<S>>(jacobian_), axes) ||
+           intervalEmpty(face, false);
   }
 
   /// The certificate of every active leaf (docs/certificate.md) into failure_.
