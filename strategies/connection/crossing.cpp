@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -65,6 +66,7 @@ class FaceSolver {
     margins_ = margins;
     certain_ = true;
     proven_ = true;
+    withinRounding_ = false;
     boxes_ = 0;
     if (m_ == 1) {
       edge(patches.front().domain(), roots);
@@ -82,6 +84,9 @@ class FaceSolver {
   /// beyond the rounding margin or by interval evaluation, uniqueness and existence by the
   /// Krawczyk test in interval arithmetic, edge signs by interval values.
   bool proven() const { return proven_ && certain_; }
+  /// Whether an exclusion of the last solve was left unproven because F comes within rounding
+  /// of zero on the face (M touches it): no finer face can prove it either.
+  bool withinRounding() const { return withinRounding_; }
 
  private:
   void recurse(const std::vector<Bernstein<S>>& patches, const FaceEnds& ends, int depth,
@@ -94,7 +99,7 @@ class FaceSolver {
       // The exclusion is a proof when every coefficient clears the rounding margin, or when
       // interval evaluation confirms it; otherwise the decision stands but is not proven.
       if (!clearsRange(patches[i], S(0), S(0), margins_[i]) && !intervalExcludes(box, int(i)))
-        proven_ = false;
+        proven_ = false, withinRounding_ = true;
       return;
     }
     std::vector<S> root;
@@ -431,6 +436,7 @@ class FaceSolver {
   std::span<const S> margins_;
   bool certain_ = true;
   bool proven_ = true;
+  bool withinRounding_ = false;
   /// Boxes of the current face subdivided so far, and the most one face may take: an isolated
   /// root needs about 2 maxDepth m boxes, a fold a few times that.
   long boxes_ = 0;
@@ -595,6 +601,14 @@ struct Polygon {
   bool outside = false;    ///< a node lies beyond the domain: not a cell of the mesh
 };
 
+/// Where a minimal m-face lies: its level, the index of its lower corner there and its k fixed
+/// axes.
+struct FaceRef {
+  int level = 0;
+  std::vector<std::int32_t> corner;
+  std::array<int, 2> axes{};
+};
+
 /// What the face solver found on one minimal m-face (cached: a face is solved once per level c).
 template <class S>
 struct FaceResult {
@@ -603,6 +617,7 @@ struct FaceResult {
   int degree = 0;               ///< faceDegree
   bool certain = true;          ///< every root decided (else its cells are singular cells)
   bool proven = true;           ///< every decision a proof (FaceSolver::proven)
+  bool withinRounding = false;  ///< FaceSolver::withinRounding
   std::int64_t degenerate = 0;  ///< roots within rounding of the face's boundary
 };
 
@@ -769,6 +784,7 @@ class AdaptiveCrossing {
     FaceResult<S> r;
     r.certain = solver.solve(point, freeAxes, face, ends, roots, margins_);
     r.proven = solver.proven();
+    r.withinRounding = solver.withinRounding();
     if (m_ > 1) r.degenerate = position_.nearBoundary(roots, box, freeAxes, ends);
     r.roots = static_cast<int>(roots.size());
     if (!roots.empty()) {
@@ -784,6 +800,9 @@ class AdaptiveCrossing {
   std::int64_t crossFaces() {
     polygons_.clear();
     rootPoints_.clear();
+    unprovenFaces_.clear();
+    unprovenOf_.clear();
+    unprovenOfEmpty_.clear();
     std::int64_t degenerate = 0;
     std::vector<std::int32_t> corner(n_), position(n_);
     std::array<Occupant, 4> around;
@@ -831,7 +850,7 @@ class AdaptiveCrossing {
             }
             it = faces_.emplace(key, solveFace(c, axes, side)).first;
           }
-          degenerate += addFace(it->second, around);
+          degenerate += addFace(it->second, around, FaceRef{level, corner, axes});
         }
       }
     }
@@ -840,16 +859,34 @@ class AdaptiveCrossing {
 
   /// Records a solved face: flags its leaves when the face is not proven, and adds its
   /// polygon (|degree| copies) when it is crossed. Returns its degenerate crossings.
-  std::int64_t addFace(const FaceResult<S>& r, std::array<Occupant, 4>& around) {
+  std::int64_t addFace(const FaceResult<S>& r, std::array<Occupant, 4>& around,
+                       const FaceRef& face) {
     const int quadrants = 1 << k_;
+    std::vector<S> centre(n_);
+    const Grid& g = tree_.grid(face.level);
+    for (int j = 0; j < n_; ++j) {
+      const bool fixed = j == face.axes[0] || (k_ == 2 && j == face.axes[1]);
+      centre[j] = domain_.lo[j] + S((face.corner[j] + (fixed ? 0.0 : 0.5)) * g.cellWidth(j));
+    }
     const bool unproven = !r.proven || r.roots > 1 || std::abs(r.degree) > 1 || r.degenerate;
     const bool singular = !r.certain || std::abs(r.degree) > 1;
+    // Roots the face solver could not isolate at its finest face level, or within rounding
+    // of the face's boundary: a finer cell has the same trouble (a tangency, or a feature at
+    // the scale of the level offset c), so such leaves are not refined.
+    const bool stuck = !r.certain || r.withinRounding || r.degenerate;
     for (int q = 0; q < quadrants; ++q) {
       if (around[q].kind != Occ::kLeaf) continue;
+      if (stuck) stuck_[around[q].leaf] = 1;
       if (unproven) unproven_[around[q].leaf] = 1;
       if (singular) singular_[around[q].leaf] = 1;
+      if (unproven)
+        setTrouble(around[q].leaf,
+                   r.roots > 0 ? std::span<const S>(r.root) : std::span<const S>(centre));
     }
-    if (r.degree == 0) return r.degenerate;
+    if (r.degree == 0) {
+      if (unproven) recordUnproven(around, face);
+      return r.degenerate;
+    }
     Polygon p;
     for (int q = 0; q < quadrants; ++q) {
       std::int64_t node = 0;
@@ -873,19 +910,67 @@ class AdaptiveCrossing {
       p.node[p.size++] = node;
     }
     if (p.size > 1 && p.node[p.size - 1] == p.node[0]) --p.size;
+    if (unproven) recordUnproven(around, face);
     p.root = static_cast<std::int32_t>(rootPoints_.size() / n_);
     rootPoints_.insert(rootPoints_.end(), r.root.begin(), r.root.end());
     for (int copy = 0; copy < std::abs(r.degree); ++copy) polygons_.push_back(p);
     return r.degenerate;
   }
 
+  /// The leaves around an unproven face (-1 for other regions), for the blocks' test.
+  void recordUnproven(const std::array<Occupant, 4>& around, const FaceRef& face) {
+    const auto f = static_cast<std::int32_t>(unprovenFaces_.size());
+    for (int q = 0; q < (1 << k_); ++q) {
+      if (around[q].kind == Occ::kLeaf) {
+        unprovenOf_.resize(tree_.size());
+        unprovenOf_[around[q].leaf].push_back(f);
+      } else if (around[q].kind == Occ::kEmpty) {
+        unprovenOfEmpty_[around[q].key].push_back(f);
+      }
+    }
+    unprovenFaces_.push_back(face);
+  }
+
+  /// Whether the face lies inside the block of `level` with lower corner `lo` (not on its
+  /// boundary).
+  bool inside(const FaceRef& face, int level, const std::vector<std::int32_t>& lo) const {
+    const std::int64_t scale = std::int64_t{1} << (face.level - level);
+    for (int j = 0; j < n_; ++j) {
+      const std::int64_t a = lo[j] * scale, b = (lo[j] + 2) * scale, x = face.corner[j];
+      const bool fixed = j == face.axes[0] || (k_ == 2 && j == face.axes[1]);
+      if (fixed ? (x <= a || x >= b) : (x < a || x + 1 > b)) return false;
+    }
+    return true;
+  }
+
+  /// Records a point near which the certificate of `leaf` failed (the first one stays): where
+  /// a block around the leaf should have its centre.
+  void setTrouble(std::int32_t leaf, std::span<const S> point) {
+    grow();
+    if (hasTrouble_[leaf]) return;
+    hasTrouble_[leaf] = 1;
+    std::copy(point.begin(), point.end(), trouble_.begin() + std::ptrdiff_t(leaf) * n_);
+  }
+
+  /// setTrouble at the centre of face (a, upper) of a leaf.
+  void faceTrouble(std::int32_t leaf, int a, bool upper) {
+    const Box<S> box = leafBox(leaf);
+    std::vector<S> centre(n_);
+    for (int j = 0; j < n_; ++j) centre[j] = (box.lo[j] + box.hi[j]) / 2;
+    centre[a] = upper ? box.hi[a] : box.lo[a];
+    setTrouble(leaf, centre);
+  }
+
   /// Per-leaf arrays follow the tree's growth.
   void grow() {
     const std::size_t size = tree_.size();
     if (empty_.size() >= size) return;
+    trouble_.resize(size * n_, S(0));
+    hasTrouble_.resize(size, 0);
     empty_.resize(size, -1);
     bandEmpty_.resize(size, 0);
     unproven_.resize(size, 0);
+    stuck_.resize(size, 0);
     singular_.resize(size, 0);
     graph_.resize(size, -1);
     faceGraph_.resize(size, -1);
@@ -897,16 +982,21 @@ class AdaptiveCrossing {
   bool cellGraph(std::int32_t leaf) {
     if (graph_[leaf] < 0) {
       restrictTo(leaf);
-      jacobian_.assign(std::size_t(m_) * n_, Interval<S>());
-      for (int i = 0; i < m_; ++i) {
-        for (int j = 0; j < n_; ++j)
-          jacobian_[std::size_t(i) * n_ + j] = derivativeHull(patches_[i], j, margins_[i]);
-      }
-      std::vector<int> axes(n_);
-      std::iota(axes.begin(), axes.end(), 0);
-      graph_[leaf] = graphTest_.graph(jacobian_, axes);
+      graph_[leaf] = patchesGraph();
     }
     return graph_[leaf] == 1;
+  }
+
+  /// The graph test of the box of patches_.
+  bool patchesGraph() {
+    jacobian_.assign(std::size_t(m_) * n_, Interval<S>());
+    for (int i = 0; i < m_; ++i) {
+      for (int j = 0; j < n_; ++j)
+        jacobian_[std::size_t(i) * n_ + j] = derivativeHull(patches_[i], j, margins_[i]);
+    }
+    std::vector<int> axes(n_);
+    std::iota(axes.begin(), axes.end(), 0);
+    return graphTest_.graph(jacobian_, axes);
   }
 
   /// Whether interval evaluation proves that M_c (with `band`: no level set between M and M_c)
@@ -931,18 +1021,26 @@ class AdaptiveCrossing {
   bool facesGraph(std::int32_t leaf) {
     if (faceGraph_[leaf] < 0) {
       restrictTo(leaf);
-      bool all = true;
-      std::vector<int> axes;
-      for (int a = 0; a < n_ && all; ++a) {
-        axes.clear();
-        for (int j = 0; j < n_; ++j) {
-          if (j != a) axes.push_back(j);
-        }
-        for (int side = 0; side < 2 && all; ++side) all = faceGraph(a, side == 1, axes);
-      }
-      faceGraph_[leaf] = all;
+      const int failed = failingFace();
+      faceGraph_[leaf] = failed < 0;
+      if (failed >= 0) faceTrouble(leaf, failed / 2, failed % 2 == 1);
     }
     return faceGraph_[leaf] == 1;
+  }
+
+  /// The first face (2 a + side) of the box of patches_ that fails the face graph test, or -1.
+  int failingFace() {
+    std::vector<int> axes;
+    for (int a = 0; a < n_; ++a) {
+      axes.clear();
+      for (int j = 0; j < n_; ++j) {
+        if (j != a) axes.push_back(j);
+      }
+      for (int side = 0; side < 2; ++side) {
+        if (!faceGraph(a, side == 1, axes)) return 2 * a + side;
+      }
+    }
+    return -1;
   }
 
   /// The graph test of one face of the leaf in patches_ (fixed axis a at its lower or upper
@@ -990,19 +1088,187 @@ class AdaptiveCrossing {
         failure_[c] = Failure::kGraph;
       } else if (k_ == 2 && !facesGraph(c)) {
         failure_[c] = Failure::kFaceGraph;
-      } else if (!simpleLink(c, incident[c])) {
+      } else if (!simpleLink(c, polygons_, incident[c])) {
         failure_[c] = Failure::kLink;
+      }
+    }
+    mergeBlocks(incident);
+  }
+
+  /// Tangency (docs/certificate.md, "Blocks"): where M touches a grid hyperplane, M_c crosses
+  /// it in a small loop or in two crossings closer than any refinement separates, so neither
+  /// leaf next to the touching point is simple; the block of 2^n leaves of one level around the
+  /// point often is. Certifies such blocks of failing leaves (the first that passes of the
+  /// candidates around each leaf); in the mesh a block is one region with one vertex per piece.
+  void mergeBlocks(const std::vector<std::vector<std::int32_t>>& incident) {
+    blocks_.clear();
+    block_.assign(tree_.size(), -1);
+    unprovenOf_.resize(tree_.size());
+    for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
+      if (!tree_.active(c) || failure_[c] == Failure::kNone || block_[c] >= 0) continue;
+      for (const std::vector<std::int32_t>& lo : blockCandidates(c)) {
+        if (tryBlock(tree_.level(c), lo, incident)) break;
       }
     }
   }
 
+  /// The lower corners of the blocks of 2^n leaves that hold leaf c, the one centred nearest
+  /// its trouble point first, then those that differ from it along more and more axes (at
+  /// most kBlockTries).
+  std::vector<std::vector<std::int32_t>> blockCandidates(std::int32_t c) const {
+    constexpr std::size_t kBlockTries = 16;
+    const auto ci = tree_.index(c);
+    const Box<S> box = leafBox(c);
+    std::uint32_t below = 0;  // bit j: the preferred block extends below the leaf along j
+    for (int j = 0; j < n_; ++j) {
+      const S t = hasTrouble_[c] ? trouble_[std::size_t(c) * n_ + j] : box.lo[j];
+      if (t < (box.lo[j] + box.hi[j]) / 2) below |= 1u << j;
+    }
+    std::vector<std::uint32_t> flips(std::size_t{1} << n_);
+    std::iota(flips.begin(), flips.end(), 0u);
+    std::stable_sort(flips.begin(), flips.end(), [](std::uint32_t a, std::uint32_t b) {
+      return std::popcount(a) < std::popcount(b);
+    });
+    std::vector<std::vector<std::int32_t>> out;
+    for (std::size_t t = 0; t < std::min(kBlockTries, flips.size()); ++t) {
+      std::vector<std::int32_t> lo(ci.begin(), ci.end());
+      for (int j = 0; j < n_; ++j)
+        lo[j] -= static_cast<std::int32_t>(((below ^ flips[t]) >> j) & 1);
+      out.push_back(std::move(lo));
+    }
+    return out;
+  }
+
+  /// The certificate of the block of 2^n leaves of `level` with lower corner `lo`: its leaves
+  /// free, one polynomial piece, every unproven face inside it, the crossings on its boundary
+  /// one simple piece, and the graph and face graph tests on its box.
+  bool tryBlock(int level, const std::vector<std::int32_t>& lo,
+                const std::vector<std::vector<std::int32_t>>& incident) {
+    std::vector<std::int32_t> members;
+    std::vector<CellKey> empties;
+    if (!blockMembers(level, lo, members, empties)) return false;
+    // Every unproven face next to the block's regions lies inside it.
+    const auto within = [&](const std::vector<std::int32_t>& faces) {
+      return std::all_of(faces.begin(), faces.end(),
+                         [&](std::int32_t f) { return inside(unprovenFaces_[f], level, lo); });
+    };
+    for (std::int32_t c : members) {
+      if (!within(unprovenOf_[c])) return false;
+    }
+    for (CellKey key : empties) {
+      auto it = unprovenOfEmpty_.find(key);
+      if (it != unprovenOfEmpty_.end() && !within(it->second)) return false;
+    }
+    std::vector<Polygon> link;
+    std::vector<std::int32_t> ps;
+    if (!blockLink(members, incident, link, ps)) return false;
+    if (!simpleLink(members.front(), link, ps)) return false;
+    // The graph tests on the block's box.
+    std::vector<std::int32_t> hi(lo);
+    for (std::int32_t& i : hi) ++i;
+    Box<S> box = cellBox(tree_.grid(level), domain_, lo);
+    box.hi = cellBox(tree_.grid(level), domain_, hi).hi;
+    const RootForms& rf = rootForms(lo, level);
+    margins_ = rf.margins;
+    for (int i = 0; i < m_; ++i) patches_[i] = rf.forms[i].restrict(box);
+    if (!patchesGraph() && !intervalEmpty(box, true)) return false;
+    if (k_ == 2 && failingFace() >= 0) return false;
+    for (std::int32_t c : members) {
+      block_[c] = static_cast<std::int32_t>(blocks_.size());
+      failure_[c] = Failure::kNone;
+    }
+    blocks_.push_back(std::move(members));
+    return true;
+  }
+
+  /// The leaves of a block: every region of it an active leaf of `level` in no other block,
+  /// inside one polynomial piece of the input.
+  bool blockMembers(int level, const std::vector<std::int32_t>& lo,
+                    std::vector<std::int32_t>& members, std::vector<CellKey>& empties) const {
+    const std::int64_t top = tree_.grid(level).cellsPerAxis();
+    const int patchLevel = in_.problem.roots.empty() ? 0 : in_.problem.rootLevel;
+    for (int j = 0; j < n_; ++j) {
+      if (lo[j] < 0 || lo[j] + 2 > top) return false;
+      if ((lo[j] >> (level - patchLevel)) != ((lo[j] + 1) >> (level - patchLevel))) return false;
+    }
+    std::vector<std::int32_t> position(n_);
+    for (std::uint32_t corner = 0; corner < (1u << n_); ++corner) {
+      for (int j = 0; j < n_; ++j)
+        position[j] = lo[j] + static_cast<std::int32_t>((corner >> j) & 1);
+      const Occupant o = tree_.find(level, position);
+      // A base cell the bounding excluded: M_c does not enter it (it would be a touch leaf).
+      if (o.kind == Occ::kEmpty) {
+        if (std::find(empties.begin(), empties.end(), o.key) == empties.end())
+          empties.push_back(o.key);
+        continue;
+      }
+      if (o.kind != Occ::kLeaf || tree_.level(o.leaf) != level || !tree_.active(o.leaf) ||
+          block_[o.leaf] >= 0)
+        return false;
+      members.push_back(o.leaf);
+    }
+    return !members.empty();
+  }
+
+  /// The polygons of the block's boundary with its leaves as one node (members.front());
+  /// those inside it drop out. False when a polygon meets the block twice (not a box).
+  bool blockLink(const std::vector<std::int32_t>& members,
+                 const std::vector<std::vector<std::int32_t>>& incident, std::vector<Polygon>& link,
+                 std::vector<std::int32_t>& ps) const {
+    std::vector<std::int32_t> around;
+    for (std::int32_t c : members)
+      around.insert(around.end(), incident[c].begin(), incident[c].end());
+    std::sort(around.begin(), around.end());
+    around.erase(std::unique(around.begin(), around.end()), around.end());
+    for (std::int32_t p : around) {
+      const Polygon q = collapsed(polygons_[p], [&](std::int64_t node) {
+        return std::find(members.begin(), members.end(), node) != members.end() ? members.front()
+                                                                                : node;
+      });
+      if (q.size < (k_ == 1 ? 2 : 3)) continue;  // inside the block
+      if (std::count(q.node.begin(), q.node.begin() + q.size, members.front()) != 1) return false;
+      ps.push_back(static_cast<std::int32_t>(link.size()));
+      link.push_back(q);
+    }
+    return true;
+  }
+
+  /// A polygon with its nodes mapped by `map`, equal neighbours merged (cyclically).
+  template <class Map>
+  static Polygon collapsed(const Polygon& poly, const Map& map) {
+    Polygon q = poly;
+    q.size = 0;
+    for (int i = 0; i < poly.size; ++i) {
+      const std::int64_t node = map(poly.node[i]);
+      if (q.size > 0 && q.node[q.size - 1] == node) continue;
+      q.node[q.size++] = node;
+    }
+    if (q.size > 1 && q.node[q.size - 1] == q.node[0]) --q.size;
+    return q;
+  }
+
+  /// The mesh's polygons with every certified block as one node (its first leaf).
+  void collapseBlocks() {
+    if (blocks_.empty()) return;
+    std::vector<Polygon> kept;
+    for (const Polygon& p : polygons_) {
+      const Polygon q = collapsed(p, [&](std::int64_t node) {
+        return node >= 0 && block_[node] >= 0 ? std::int64_t{blocks_[block_[node]].front()} : node;
+      });
+      if (q.size >= (k_ == 1 ? 2 : 3)) kept.push_back(q);
+    }
+    polygons_ = std::move(kept);
+  }
+
   /// The link of leaf c (k = 2): one edge per polygon, between the polygon's two nodes next to
   /// c; `nodes` receives the distinct neighbour nodes the edges number.
-  std::vector<std::array<int, 2>> linkEdges(std::int64_t c, const std::vector<std::int32_t>& ps,
-                                            std::vector<std::int64_t>& nodes) const {
+  static std::vector<std::array<int, 2>> linkEdges(std::int64_t c,
+                                                   const std::vector<Polygon>& polygons,
+                                                   const std::vector<std::int32_t>& ps,
+                                                   std::vector<std::int64_t>& nodes) {
     std::vector<std::array<int, 2>> edges;
     for (std::int32_t p : ps) {
-      const Polygon& poly = polygons_[p];
+      const Polygon& poly = polygons[p];
       int at = 0;
       while (poly.node[at] != c) ++at;
       std::array<int, 2> e{};
@@ -1020,11 +1286,12 @@ class AdaptiveCrossing {
   /// Whether the crossings on the boundary of leaf c form one simple piece: none, or two
   /// (k = 1), or one cycle through every neighbour region exactly twice (k = 2; the regions
   /// beyond the domain are nodes too, so a surface with boundary closes its loop there).
-  bool simpleLink(std::int32_t c, const std::vector<std::int32_t>& polygons) const {
-    if (polygons.empty()) return true;
-    if (k_ == 1) return polygons.size() == 2;
+  bool simpleLink(std::int64_t c, const std::vector<Polygon>& polygons,
+                  const std::vector<std::int32_t>& ps) const {
+    if (ps.empty()) return true;
+    if (k_ == 1) return ps.size() == 2;
     std::vector<std::int64_t> nodes;
-    const std::vector<std::array<int, 2>> edges = linkEdges(c, polygons, nodes);
+    const std::vector<std::array<int, 2>> edges = linkEdges(c, polygons, ps, nodes);
     UnionFind uf{std::vector<int>(nodes.size())};
     std::iota(uf.parent.begin(), uf.parent.end(), 0);
     std::vector<int> degree(nodes.size(), 0);
@@ -1047,13 +1314,15 @@ class AdaptiveCrossing {
       tree_.addLeaf(grid_.depth, in_.cells.cell(c), true);
     tree_.setBaseCells(static_cast<std::int32_t>(in_.cells.size()));
     faces_.clear();
-    empty_.clear(), bandEmpty_.clear(), unproven_.clear(), singular_.clear(), graph_.clear(),
-        faceGraph_.clear();
+    empty_.clear(), bandEmpty_.clear(), unproven_.clear(), stuck_.clear(), singular_.clear(),
+        graph_.clear(), faceGraph_.clear();
     failure_.clear();
+    trouble_.clear(), hasTrouble_.clear();
     refined_ = 0;
     budgetSpent_ = false;
     while (true) {
       std::fill(unproven_.begin(), unproven_.end(), 0);
+      std::fill(stuck_.begin(), stuck_.end(), 0);
       std::fill(singular_.begin(), singular_.end(), 0);
       const std::int64_t degenerate = crossFaces();
       grow();
@@ -1061,7 +1330,8 @@ class AdaptiveCrossing {
       // Refine the leaves that fail, above the maximum level.
       std::vector<std::int32_t> refine;
       for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
-        if (tree_.active(c) && failure_[c] != Failure::kNone && tree_.level(c) < tree_.maxLevel())
+        if (tree_.active(c) && failure_[c] != Failure::kNone && tree_.level(c) < tree_.maxLevel() &&
+            !(failure_[c] == Failure::kCrossing && stuck_[c]))
           refine.push_back(c);
       }
       if (refine.empty() || !in_.refine) return degenerate;
@@ -1085,6 +1355,7 @@ class AdaptiveCrossing {
     t.maxLevel = grid_.depth;
     t.refinedCells = refined_;
     std::map<std::string, std::int64_t> reasons;
+    std::int64_t stuck = 0;
     for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
       if (!tree_.active(c)) continue;
       t.maxLevel = std::max(t.maxLevel, tree_.level(c));
@@ -1094,6 +1365,7 @@ class AdaptiveCrossing {
       }
       ++t.uncertifiedCells;
       ++reasons[failureName(failure_[c])];
+      stuck += failure_[c] == Failure::kCrossing && stuck_[c];
       UncertifiedCell u;
       const Box<double> box = cellBox(tree_.grid(tree_.level(c)), grid_.domain, tree_.index(c));
       u.lo = box.lo;
@@ -1105,13 +1377,17 @@ class AdaptiveCrossing {
     std::ostringstream why;
     if (t.uncertifiedCells > 0) {
       why << t.uncertifiedCells << " cell" << (t.uncertifiedCells == 1 ? "" : "s")
-          << " uncertified at level " << t.maxDepth << " (";
+          << " uncertified down to level " << t.maxLevel << " of " << t.maxDepth << " (";
       bool first = true;
       for (const auto& [name, count] : reasons) {
         why << (first ? "" : ", ") << name << ": " << count;
         first = false;
       }
       why << ")";
+      if (stuck > 0) {
+        why << "; " << stuck << " next to crossings no refinement separates (M touches a grid "
+            << "plane, or a singular point)";
+      }
       if (budgetSpent_) why << "; refinement stopped at " << maxLeaves_ << " leaves";
     } else if (degenerate > 0) {
       why << degenerate << " crossings within rounding of a face boundary";
@@ -1123,6 +1399,7 @@ class AdaptiveCrossing {
   /// The dual complex of the final tree (docs/crossing.md, steps 3 and 4), on the polygons
   /// that lie inside the domain.
   void buildComplex(ConnectionOutput<S>& out) {
+    collapseBlocks();
     const std::size_t count = tree_.size();
     std::vector<std::int32_t> mesh;
     for (std::size_t p = 0; p < polygons_.size(); ++p) {
@@ -1184,10 +1461,7 @@ class AdaptiveCrossing {
                       std::vector<std::int32_t>& piece, const SlotOf& slotOf,
                       ConnectionOutput<S>& out) const {
     if (ps.empty()) return 0;
-    const auto ci = tree_.index(std::int32_t(c));
-    const std::int64_t top = tree_.grid(tree_.level(std::int32_t(c))).cellsPerAxis();
-    const bool boundary =
-        std::any_of(ci.begin(), ci.end(), [&](std::int32_t i) { return i == 0 || i + 1 == top; });
+    const bool boundary = onDomainBoundary(static_cast<std::int32_t>(c));
     if (k_ == 1) {
       for (std::int32_t p : ps) piece[p * 4 + slotOf(p, c)] = 0;
       if (ps.size() != 2 && !(boundary && ps.size() == 1)) ++out.ambiguousCells;
@@ -1195,7 +1469,7 @@ class AdaptiveCrossing {
     }
     std::vector<std::int64_t> nodes;
     const std::vector<std::array<int, 2>> edges =
-        linkEdges(static_cast<std::int64_t>(c), ps, nodes);
+        linkEdges(static_cast<std::int64_t>(c), polygons_, ps, nodes);
     UnionFind uf{std::vector<int>(nodes.size())};
     std::iota(uf.parent.begin(), uf.parent.end(), 0);
     for (const auto& e : edges) uf.unite(e[0], e[1]);
@@ -1218,6 +1492,21 @@ class AdaptiveCrossing {
     simple = simple && (ends == 0 || (boundary && ends == 2));
     if (!simple) ++out.ambiguousCells;
     return components;
+  }
+
+  /// Whether leaf c (or a leaf of its block) touches the domain boundary.
+  bool onDomainBoundary(std::int32_t c) const {
+    const auto touches = [&](std::int32_t leaf) {
+      const auto ci = tree_.index(leaf);
+      const std::int64_t top = tree_.grid(tree_.level(leaf)).cellsPerAxis();
+      return std::any_of(ci.begin(), ci.end(),
+                         [&](std::int32_t i) { return i == 0 || i + 1 == top; });
+    };
+    if (c < static_cast<std::int32_t>(block_.size()) && block_[c] >= 0) {
+      const auto& members = blocks_[block_[c]];
+      return std::any_of(members.begin(), members.end(), touches);
+    }
+    return touches(c);
   }
 
   /// The simplices of one mesh polygon: an edge (k = 1), a triangle, or a quad split along its
@@ -1271,9 +1560,16 @@ class AdaptiveCrossing {
   // Per leaf: proven empty (-1 unknown), next to an unproven face, next to an undecided face,
   // graph tests (-1 unknown), and the certificate's failure.
   std::vector<std::int8_t> empty_, bandEmpty_;
-  std::vector<std::uint8_t> unproven_, singular_;
+  std::vector<std::uint8_t> unproven_, stuck_, singular_;
   std::vector<std::int8_t> graph_, faceGraph_;
   std::vector<Failure> failure_;
+  std::vector<S> trouble_;  ///< n per leaf: where its certificate failed (setTrouble)
+  std::vector<std::uint8_t> hasTrouble_;
+  std::vector<FaceRef> unprovenFaces_;                 ///< recordUnproven
+  std::vector<std::vector<std::int32_t>> unprovenOf_;  ///< per leaf: its unproven faces
+  std::unordered_map<CellKey, std::vector<std::int32_t>> unprovenOfEmpty_;  ///< per empty cell
+  std::vector<std::vector<std::int32_t>> blocks_;  ///< the leaves of certified blocks
+  std::vector<std::int32_t> block_;                ///< per leaf: its block, or -1
   std::int64_t refined_ = 0;
   std::size_t maxLeaves_ = 0;
   bool budgetSpent_ = false;
