@@ -99,7 +99,7 @@ inline constexpr std::array<std::string_view, 22> kExperimentRunColumns = {
 /// with dotted names. Numeric fields a later summary schema adds come after these, sorted by
 /// name; list elements (singular points, the perturbation level) and `expect` (see
 /// `expect_ok`) are left out.
-inline constexpr std::array<std::string_view, 38> kExperimentSummaryColumns = {
+inline constexpr std::array<std::string_view, 39> kExperimentSummaryColumns = {
     "cells.visited",
     "cells.solution",
     "cells.normal",
@@ -137,7 +137,8 @@ inline constexpr std::array<std::string_view, 38> kExperimentSummaryColumns = {
     "topology.max_level",
     "topology.reason",
     "topology.refined_cells",
-    "topology.uncertified_cells"};
+    "topology.uncertified_cells",
+    "topology.block_cells"};
 
 /// The numeric fields of a JSON document (numbers and null), in document order, named by
 /// their dotted paths (`cells.visited`); the number text is kept as written, null is "".

@@ -181,8 +181,9 @@ std::string toJson(const Summary& s) {
   o << "  \"topology\": {\"certified\": " << (g.certified ? "true" : "false")
     << ", \"reason\": " << (g.reason.empty() ? "null" : jsonQuoted(g.reason))
     << ", \"certified_cells\": " << g.certifiedCells << ", \"refined_cells\": " << g.refinedCells
-    << ", \"uncertified_cells\": " << g.uncertifiedCells << ", \"base_level\": " << g.baseLevel
-    << ", \"max_level\": " << g.maxLevel << ", \"max_depth\": " << g.maxDepth << "},\n";
+    << ", \"uncertified_cells\": " << g.uncertifiedCells << ", \"block_cells\": " << g.blockCells
+    << ", \"base_level\": " << g.baseLevel << ", \"max_level\": " << g.maxLevel
+    << ", \"max_depth\": " << g.maxDepth << "},\n";
   o << "  \"timing_s\": {\"subdivision\": " << number(s.tSubdivision)
     << ", \"projection\": " << number(s.tProjection)
     << ", \"connection\": " << number(s.tConnection) << ", \"analysis\": " << number(s.tAnalysis)

@@ -90,6 +90,9 @@ struct TopologyRecord {
   /// Leaves of the final tree that hold a certified piece of M (or are proven empty), that
   /// were refined on the way, and that stay uncertified at the maximum depth.
   std::int64_t certifiedCells = 0, refinedCells = 0, uncertifiedCells = 0;
+  /// Certified leaves that are certified together, in blocks of 2^n leaves around a point
+  /// where M touches a grid plane (docs/certificate.md, "Blocks"); counted in certifiedCells.
+  std::int64_t blockCells = 0;
   int baseLevel = 0;  ///< `--depth`
   int maxLevel = 0;   ///< the deepest level a leaf reached
   int maxDepth = 0;   ///< the limit of refinement (`--max-depth`)

