@@ -39,10 +39,11 @@ struct RunResult {
 RunResult runPipeline(const Problem& problem, const Settings& settings,
                       const Progress& progress = {});
 
-/// Levels below `--depth` that adaptive refinement may reach by default. 0 for now: the
-/// certificate is computed on every run, but refinement is opt-in (`--max-depth`) until the
-/// adaptive connection is closed on every corpus (docs/certificate.md, "Status").
-inline constexpr int kDefaultRefinementLevels = 0;
+/// Levels below `--depth` that adaptive refinement may reach by default: genus2 at depth 5
+/// needs 6, the two circles 0.001 apart of curve-pair-close 9 (docs/certificate.md); the leaf
+/// budget bounds the cost where refinement cannot succeed. `--max-depth` equal to `--depth`
+/// turns it off.
+inline constexpr int kDefaultRefinementLevels = 10;
 
 /// The default `--max-depth`: depth + kDefaultRefinementLevels, or less where the cell keys
 /// of the 2^n-tree would not fit (n * level <= 64).

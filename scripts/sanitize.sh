@@ -3,7 +3,8 @@
 # and runs the unit tests under the sanitizers (docs/testing.md).
 # Usage: scripts/sanitize.sh [--subset]      the whole unit suite ("~[slow]~[.]"), or a subset
 #                                            (parsing, problems, application files, hostile
-#                                            input, Bernstein, subdivision, connection)
+#                                            input, Bernstein, subdivision, connection,
+#                                            certificate)
 #        scripts/sanitize.sh --build TARGET...  configure if needed and build only TARGETs
 #                                            (scripts/fuzz.sh: `--build fuzzers`)
 # The tests run the sanitized CLI as a child process; a report from the test process or from any
@@ -17,7 +18,7 @@ cd "$(dirname "$0")/.."
 subset=
 # ([applications] is left out: its solves take minutes each under ASan, e.g. 340 s for the
 # rolling-ball blend; application files are read by [geometry], [hostile] and [corpus].)
-for tag in problem expression geometry hostile bernstein subdivision connection corpus; do
+for tag in problem expression geometry hostile bernstein subdivision connection certificate corpus; do
   subset+="${subset:+,}[$tag]~[slow]~[.]"
 done
 

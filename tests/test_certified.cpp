@@ -76,14 +76,6 @@ Settings settingsFor(int depth, int maxDepth) {
   return s;
 }
 
-/// The refinement the certified tests ask for: six levels below the depth (refinement is not
-/// yet the default, docs/certificate.md), or less where the cell keys would not fit.
-int refinedDepth(int n, int depth) {
-  int level = depth + 6;
-  while (level > depth && !ndc::Grid::fits(n, level)) --level;
-  return level;
-}
-
 template <class S>
 RunResult solve(const Problem& problem, int depth, int maxDepth = 0) {
   ndc::test::PrecisionScope<S> scope(128);
@@ -278,13 +270,13 @@ TEMPLATE_TEST_CASE("certified: thin features come out certified and right after 
     }
     uniformWrong += !uniformRight;
 
-    // Default refinement limit: certified, and the true topology.
-    const RunResult refined = solve<TestType>(problem, c.depth, refinedDepth(problem.n(), c.depth));
+    // Default settings (refinement down to depth + 10): certified, and the true topology.
+    const RunResult refined = solve<TestType>(problem, c.depth);
     {
       std::string why;
       rightTopology(refined, c.truth, why);
       INFO("refined: " << describe(refined) << "\nwrong: " << why);
-      checkRecord(refined, problem, c.depth, refinedDepth(problem.n(), c.depth));
+      checkRecord(refined, problem, c.depth, 0);
       CHECK(refined.summary.topology.certified);
       checkTopology(refined, c.truth);
       CHECK(refined.summary.mesh.maxResidual <= residualBound<TestType>());
@@ -369,10 +361,10 @@ TEMPLATE_TEST_CASE("certified: surfaces that leave the domain are certified with
     const int depth = mpfr ? *c.mpfrDepth : c.depth;
     ++runs;
     const Problem problem = ndc::parseProblem(c.text, std::string(c.label) + ".toml");
-    const RunResult r = solve<TestType>(problem, depth, refinedDepth(problem.n(), depth));
+    const RunResult r = solve<TestType>(problem, depth);
     INFO(c.label << ": " << describe(r));
     REQUIRE(r.k == 2);
-    checkRecord(r, problem, depth, refinedDepth(problem.n(), depth));
+    checkRecord(r, problem, depth, 0);
     CHECK(r.summary.topology.certified);
     checkTopology(r, c.truth);
     CHECK(r.summary.mesh.maxResidual <= residualBound<TestType>());
@@ -666,13 +658,13 @@ void runCorpus(std::uint32_t first, std::uint32_t last, int maxN) {
     const Embedding e = embedding(seed);
     if (e.slot.n > maxN) continue;
     const Problem problem = ndc::parseProblem(e.text, e.name + ".toml");
-    const RunResult r = solve<S>(problem, e.slot.depth, refinedDepth(problem.n(), e.slot.depth));
+    const RunResult r = solve<S>(problem, e.slot.depth);
     ++runs;
     std::string why;
     const bool right = rightTopology(r, e.truth, why);
     INFO(e.text << "\n" << describe(r) << "\nwrong: " << why);
     REQUIRE(r.k == e.k());
-    checkRecord(r, problem, e.slot.depth, refinedDepth(problem.n(), e.slot.depth));
+    checkRecord(r, problem, e.slot.depth, 0);
     if (!r.summary.topology.certified) {
       uncertified << "  " << e.name << " (depth " << e.slot.depth << ", "
                   << (right ? "right" : "wrong") << "): " << r.summary.topology.reason << "\n";

@@ -253,11 +253,11 @@ TEST_CASE("crossing: closed curves and surfaces at depth 5 and 6", "[crossing][s
   });
 }
 
-// Known failures of the crossing connection, kept with their true expectations ([!mayfail]) so
-// that they pass once it is fixed. All come from M crossing one m-face twice (it passes nearly
-// tangent to the face, or a thin cap or ridge lies between two grid planes). Up to c65e85f the
-// face gave two identical dual cells (non-manifold and boundary edges); 8da3b16 emits dual
-// cells mod 2, which fixed the R^6 cases, but the ridge cases still fold (see below).
+// Former known failures of the crossing connection. All come from M crossing one m-face twice
+// (it passes nearly tangent to the face, or a thin cap or ridge lies between two grid planes).
+// Up to c65e85f the face gave two identical dual cells (non-manifold and boundary edges);
+// 8da3b16 emits dual cells mod 2, which fixed the R^6 cases; the ridge cases below are right
+// since the certificate's refinement is the default (docs/certificate.md).
 
 TEST_CASE("crossing: surfaces in R^6 at depths 4 and 5", "[crossing][slow]") {
   // The grid 4-face x4 = -0.3, x5 = 0.375 (cell (21, 6, 15, 20) in x1, x2, x3, x6 at depth 5)
@@ -270,19 +270,20 @@ TEST_CASE("crossing: surfaces in R^6 at depths 4 and 5", "[crossing][slow]") {
   });
 }
 
-TEST_CASE("crossing: a genus-2 surface", "[crossing][!mayfail]") {
+TEST_CASE("crossing: a genus-2 surface", "[crossing]") {
   // Flat along the lemniscate (z = +-0.1 where f = 0): where a grid plane lies just below that
   // ridge, the surface crosses grid edges twice. Before 8da3b16 the dual quads doubled up
-  // (depth 7: 8 boundary, 56 non-manifold edges); since, 32 non-manifold edges remain at depth 7
-  // (16 at depth 5), each in 4 triangles, between two vertices 1e-4 apart on the ridge (the two
-  // per-piece vertices of a split cell). torus-cap below shows the same at z = 0.4.
+  // (depth 7: 8 boundary, 56 non-manifold edges); on the uniform grid 32 non-manifold edges
+  // remain at depth 7 (16 at depth 5), each in 4 triangles, between two vertices 1e-4 apart on
+  // the ridge (the two per-piece vertices of a split cell). The default refinement separates
+  // the two crossings. torus-cap below shows the same at z = 0.4.
   checkCases<double>({
       {"genus2", example("genus2"), 5, 1, -2},
       {"genus2", example("genus2"), 7, 1, -2},
   });
 }
 
-TEST_CASE("crossing: a thin cap crosses a grid edge twice", "[crossing][!mayfail]") {
+TEST_CASE("crossing: a thin cap crosses a grid edge twice", "[crossing]") {
   // The ring torus of torus.toml, with a z grid plane 0.004 below its top circle at depth 5.
   checkCases<double>({{"torus-cap", inlineProblem(kTorusCap, "torus-cap"), 5, 1, 0}});
 }

@@ -306,15 +306,11 @@ struct Case {
 
 /// Cases the crossing connection gets wrong, kept with their true expectations: their runs are
 /// the "[!mayfail]" tests below, so that they pass once it is fixed. Before the level
-/// perturbation (a3e7a58) 45 of the 101 double runs were wrong; now these are left.
-const std::vector<std::string> kKnownFailures = {
-    // Rotated ring torus (a hypersurface: no perturbation; generic position): 2 non-manifold
-    // edges and 4 ambiguous cells at depths 4 and 5 (none at 6 and 7). A grid face near the
-    // inner equator (a saddle of M) is crossed on all four edges, and its two arcs meet in one
-    // cell: two sheets in a cell, the thin-feature limit of docs/crossing.md (per-cell
-    // certificates and refinement, not general position, fix it).
-    "torus-n3-0.5-0.25-rot9",
-};
+/// perturbation (a3e7a58) 45 of the 101 double runs were wrong. The last one, the rotated ring
+/// torus torus-n3-0.5-0.25-rot9 (2 non-manifold edges at depths 4 and 5 on the uniform grid:
+/// two sheets in a cell near the inner equator), is right since the certificate's refinement
+/// became the default.
+const std::vector<std::string> kKnownFailures = {};
 
 bool isKnownFailure(const std::string& name) {
   return std::find(kKnownFailures.begin(), kKnownFailures.end(), name) != kKnownFailures.end();

@@ -68,7 +68,7 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
                   "Deepest level adaptive refinement may reach where a cell's topology "
                   "certificate fails (default: depth + " +
                       std::to_string(kDefaultRefinementLevels) +
-                      ", no refinement; genus2 at depth 5 needs 11)")
+                      ", or less where n * level > 64; equal to --depth: no refinement)")
       ->type_name("L");
   solve.add_option("--bounding", s.bounding, "Bounding strategy")
       ->type_name(joined(kBoundingNames))

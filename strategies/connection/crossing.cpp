@@ -665,10 +665,51 @@ class AdaptiveCrossing {
     }
     // Refinement stops at this many leaves (a bound on memory; far above what thin features
     // need, which grows with the cells near them, not with the grid).
-    maxLeaves_ = std::max<std::size_t>(16 * in.cells.size(), std::size_t{1} << 20);
+    maxLeaves_ = std::max<std::size_t>(16 * in.cells.size(), std::size_t{1} << 16);
   }
 
+  /// The certified mesh, refining where the certificate fails. When refinement does not reach a
+  /// certificate and its mesh has more non-manifold defects than the base grid's (crossings at
+  /// the scale of the level offset c, docs/certificate.md "Status"), the base grid's is kept.
   ConnectionOutput<S> run() {
+    ConnectionOutput<S> out = attempts();
+    if (out.topology.certified || refined_ == 0) return out;
+    const std::int64_t refinedDefects = nonmanifold(out.complex);
+    const int reached = out.topology.maxLevel;
+    refining_ = false;
+    ConnectionOutput<S> base = attempts();
+    const std::int64_t baseDefects = nonmanifold(base.complex);
+    if (baseDefects >= refinedDefects) return out;
+    base.topology.reason +=
+        "; refinement down to level " + std::to_string(reached) + " did not certify and left " +
+        std::to_string(refinedDefects) +
+        " non-manifold edges or branch vertices, so the base grid's mesh is kept";
+    return base;
+  }
+
+  /// Edges of more than two triangles (k = 2) or vertices of more than two edges (k = 1).
+  static std::int64_t nonmanifold(const Complex<S>& complex) {
+    std::unordered_map<std::uint64_t, int> uses;
+    const std::size_t count = complex.simplexCount();
+    const int k = complex.k;
+    for (std::size_t t = 0; t < count; ++t) {
+      const std::int32_t* v = complex.simplices.data() + t * (k + 1);
+      if (k == 1) {
+        ++uses[std::uint64_t(v[0])], ++uses[std::uint64_t(v[1])];
+        continue;
+      }
+      for (int i = 0; i < 3; ++i) {
+        const auto a = std::uint64_t(std::min(v[i], v[(i + 1) % 3]));
+        const auto b = std::uint64_t(std::max(v[i], v[(i + 1) % 3]));
+        ++uses[a << 32 | b];
+      }
+    }
+    return std::count_if(uses.begin(), uses.end(), [](const auto& u) { return u.second > 2; });
+  }
+
+  /// Level offsets until no crossing is within rounding of a face boundary, each with its
+  /// refinement and certificate; the complex of the last.
+  ConnectionOutput<S> attempts() {
     ConnectionOutput<S> out;
     out.complex.n = n_;
     out.complex.k = k_;
@@ -1337,7 +1378,7 @@ class AdaptiveCrossing {
             !(failure_[c] == Failure::kCrossing && stuck_[c]))
           refine.push_back(c);
       }
-      if (refine.empty() || !in_.refine) return degenerate;
+      if (refine.empty() || !in_.refine || !refining_) return degenerate;
       if (tree_.size() + refine.size() * (std::size_t{1} << n_) > maxLeaves_) {
         budgetSpent_ = true;
         return degenerate;
@@ -1576,6 +1617,7 @@ class AdaptiveCrossing {
   std::vector<std::int32_t> block_;                ///< per leaf: its block, or -1
   std::int64_t refined_ = 0;
   std::size_t maxLeaves_ = 0;
+  bool refining_ = true;  ///< false: certify the base grid only (run's fallback)
   bool budgetSpent_ = false;
 };
 
