@@ -663,9 +663,10 @@ class AdaptiveCrossing {
       if (k_ == 1) fixedAxes_.push_back({a, -1});
       for (int b = a + 1; k_ == 2 && b < n_; ++b) fixedAxes_.push_back({a, b});
     }
-    // Refinement stops at this many leaves (a bound on memory; far above what thin features
-    // need, which grows with the cells near them, not with the grid).
-    maxLeaves_ = std::max<std::size_t>(16 * in.cells.size(), std::size_t{1} << 16);
+    // Refinement stops before this many leaves: thin features need a few times the base
+    // cells (genus2 at depth 5: 8x); where refinement cannot succeed (tangency along a curve,
+    // graph tests that fail on every cell) it bounds the cost to a few base grids.
+    maxLeaves_ = std::max<std::size_t>(16 * in.cells.size(), std::size_t{1} << 12);
   }
 
   /// The certified mesh, refining where the certificate fails. When refinement does not reach a
