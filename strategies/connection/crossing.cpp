@@ -664,9 +664,12 @@ class AdaptiveCrossing {
       for (int b = a + 1; k_ == 2 && b < n_; ++b) fixedAxes_.push_back({a, b});
     }
     // Refinement stops before this many leaves: thin features need a few times the base
-    // cells (genus2 at depth 5: 8x); where refinement cannot succeed (tangency along a curve,
-    // graph tests that fail on every cell) it bounds the cost to a few base grids.
-    maxLeaves_ = std::max<std::size_t>(16 * in.cells.size(), std::size_t{1} << 12);
+    // cells (genus2 at depth 5: 8x, the thin torus at depth 3: 50x, so at least 65536 in
+    // R^3); where refinement cannot succeed (tangency along a curve, graph tests that fail on
+    // every cell) it bounds the cost. A leaf costs more and a refinement makes 2^n of them as
+    // n grows, so the floor shrinks by 16 per dimension, to 4096 from R^4 on.
+    maxLeaves_ = std::max<std::size_t>(16 * in.cells.size(),
+                                       std::size_t{1} << std::max(12, 16 - 4 * (grid_.n - 3)));
   }
 
   /// The certified mesh, refining where the certificate fails. When refinement does not reach a
