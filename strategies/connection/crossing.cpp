@@ -1151,6 +1151,9 @@ class AdaptiveCrossing {
     unprovenOf_.resize(tree_.size());
     for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
       if (!tree_.active(c) || failure_[c] == Failure::kNone || block_[c] >= 0) continue;
+      // A leaf whose own graph test fails: the graph test on a block around it would too
+      // (a wider box, wider Jacobian enclosures); only refinement can help.
+      if (failure_[c] == Failure::kGraph) continue;
       for (const std::vector<std::int32_t>& lo : blockCandidates(c)) {
         if (tryBlock(tree_.level(c), lo, incident)) break;
       }
