@@ -147,7 +147,9 @@ std::string toJson(const Summary& s) {
     << ", \"classification\": " << jsonQuoted(t.classification)
     << ", \"connection\": " << jsonQuoted(t.connection)
     << ", \"jitter\": " << (t.jitter ? std::to_string(*t.jitter) : "null")
-    << ", \"max_depth\": " << s.topology.maxDepth << "},\n";
+    << ", \"max_depth\": " << s.topology.maxDepth
+    << ", \"tolerance\": " << (t.tolerance > 0 ? number(t.tolerance) : std::string("null"))
+    << "},\n";
   o << "  \"cells\": {\"visited\": " << s.visited << ", \"solution\": " << s.solution
     << ", \"normal\": " << s.normal << ", \"abnormal\": " << s.abnormal
     << ", \"failed\": " << s.failed << "},\n";

@@ -419,6 +419,7 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   t = Clock::now();
   ConnectionInput<S> input{problem, system, cells, projections, classes, project, problem.k()};
   input.maxLevel = maxDepthOf(problem, settings);
+  input.tolerance = settings.tolerance;
   input.refine = [&](const Box<double>& cell) {
     return refineCell<S>(problem, settings, subdivision, cell);
   };
@@ -498,20 +499,6 @@ int maxDepthOf(const Problem& problem, const Settings& settings) {
                      " (need depth <= max-depth, n * max-depth <= 64 and max-depth <= 30)");
   }
   return settings.maxDepth;
-}
-
-int depthForTolerance(const Problem& problem, double tolerance) {
-  if (!(tolerance > 0) || !std::isfinite(tolerance)) {
-    throw InputError(problem.path + ": tolerance must be a positive number");
-  }
-  double widest = 0;
-  for (int j = 0; j < problem.n(); ++j) widest = std::max(widest, problem.domain.width(j));
-  int depth = 0;
-  while (widest / std::ldexp(1.0, depth) > tolerance) {
-    if (++depth > 30)
-      throw InputError(problem.path + ": tolerance too small: it needs a depth beyond 30");
-  }
-  return std::max(depth, 1);
 }
 
 RunResult runPipeline(const Problem& problem, const Settings& settings, const Progress& progress) {

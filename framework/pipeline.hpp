@@ -53,7 +53,4 @@ int defaultMaxDepth(int n, int depth);
 /// throws InputError when it is below the depth or does not fit.
 int maxDepthOf(const Problem& problem, const Settings& settings);
 
-/// The smallest depth L whose cells are no wider than `tolerance` on every axis.
-int depthForTolerance(const Problem& problem, double tolerance);
-
 }  // namespace ndc

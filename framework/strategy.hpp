@@ -53,10 +53,10 @@ using Projector = std::function<ProjectedPoint<S>(std::span<S> x)>;
 /// Classification of one solution cell from its closed box and its projected point.
 /// Models: PaperClassification.
 template <class C, class S>
-concept ClassificationStrategy =
-    requires(const C c, const Box<S>& cell, std::span<const S> point, bool converged) {
-      { c.classify(cell, point, converged) } -> std::same_as<CellClass>;
-    };
+concept ClassificationStrategy = requires(const C c, const Box<S>& cell, std::span<const S> point,
+                                          bool converged) {
+  { c.classify(cell, point, converged) } -> std::same_as<CellClass>;
+};
 
 /// Everything a connection strategy may use.
 template <class S>
@@ -74,6 +74,9 @@ struct ConnectionInput {
   std::function<std::vector<std::uint8_t>(const Box<double>& cell)> refine;
   /// The deepest level refinement may reach (at least the grid's depth).
   int maxLevel = 0;
+  /// Chord error target (`--tolerance`): leaves whose mesh pieces lie farther from M are
+  /// refined too, up to maxLevel; 0: none.
+  double tolerance = 0;
   /// Per equation: a bound on the rounding error of its Bernstein coefficients on the domain,
   /// relative to the largest (certificates treat smaller coefficients as unknown signs).
   std::vector<double> coefficientError;

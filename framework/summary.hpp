@@ -28,6 +28,9 @@ struct Settings {
   /// The deepest level adaptive refinement may reach (`--max-depth`); 0: the default,
   /// ndc::defaultMaxDepth (docs/certificate.md).
   int maxDepth = 0;
+  /// Chord error the mesh should stay below (`--tolerance`): the crossing connection refines
+  /// the leaves whose mesh pieces are farther from M (docs/certificate.md); 0: none.
+  double tolerance = 0;
 };
 
 /// Mesh statistics after welding identical vertices (`mesh` in summary.json).

@@ -298,6 +298,46 @@ TEMPLATE_TEST_CASE("certified: thin features come out certified and right after 
   if (!mpfr) CHECK(uniformWrong >= 1);
 }
 
+// --- The chord tolerance ------------------------------------------------------------------------
+
+TEMPLATE_TEST_CASE("certified: --tolerance refines until the chord error is below it",
+                   "[certified]", NDC_SCALARS) {
+  const bool mpfr = !std::is_same_v<TestType, double>;
+  struct ChordCase {
+    const char* problem;
+    int depth;
+    double tolerance;
+    bool mpfr;
+  };
+  const std::vector<ChordCase> cases = {{"sphere", 3, 2e-3, true},
+                                        {"circle-3d", 3, 1e-4, true},
+                                        {"space-curve-r4", 3, 2e-3, false},
+                                        {"clifford-torus", 3, 2e-3, false},
+                                        {"torus", 4, 1e-3, false}};
+  for (const ChordCase& c : cases) {
+    if (mpfr && !c.mpfr) continue;
+    INFO(c.problem << " at depth " << c.depth << ", tolerance " << c.tolerance);
+    const Problem problem = example(c.problem);
+    Settings settings = settingsFor<TestType>(c.depth, 0);
+    const RunResult base = solve<TestType>(problem, c.depth);
+    settings.tolerance = c.tolerance;
+    ndc::test::PrecisionScope<TestType> scope(128);
+    const RunResult fine = ndc::runPipeline(problem, settings);
+    INFO("base: " << describe(base) << "\nwith the tolerance: " << describe(fine));
+    // The base grid misses the tolerance, so the test needs the refinement it checks.
+    REQUIRE(base.summary.mesh.maxChordError > c.tolerance);
+    const auto& m = fine.summary.mesh;
+    CHECK(m.maxChordError <= c.tolerance);
+    CHECK(m.chordFailures == 0);
+    CHECK(fine.summary.topology.certified);
+    CHECK(m.components == *problem.expect.components);
+    CHECK(m.eulerCharacteristic == *problem.expect.eulerCharacteristic);
+    CHECK(m.maxResidual <= residualBound<TestType>());
+    CHECK(fine.summary.settings.depth == c.depth);
+    CHECK(fine.summary.topology.maxLevel > c.depth);
+  }
+}
+
 // --- Surfaces that leave the domain --------------------------------------------------------------
 
 namespace {

@@ -240,11 +240,21 @@ TEST_CASE("cli: a valid solve runs the pipeline and writes its outputs", "[cli]"
   CHECK(fs::exists(out / "summary.json"));
   CHECK(fs::exists(out / "mesh.ply"));
   CHECK(fs::exists(out / "cells.csv"));
-  // --tolerance picks the depth: cells of width 4/2^L <= 0.1 first at L = 6.
-  const Run tolerance = ndcontour("solve " + valid + " --tolerance 0.1 --json");
+  // --tolerance is a chord error: --depth stays the base level, the grid refines below it.
+  const Run tolerance = ndcontour("solve " + valid + " --depth 3 --tolerance 1e-4 --json");
+  INFO(tolerance.err);
   CHECK(tolerance.status == 0);
-  CHECK(contains(tolerance.out, "\"depth\": 6"));
-  checkBadInput(ndcontour("solve " + valid + " --tolerance 0.1 --depth 3"), {"--depth"});
+  CHECK(tolerance.err.empty());
+  CHECK(contains(tolerance.out, "\"depth\": 3"));
+  CHECK(contains(tolerance.out, "\"tolerance\": 0.0001"));
+  const Run plain = ndcontour("solve " + valid + " --depth 3 --json");
+  CHECK(contains(plain.out, "\"tolerance\": null"));
+  checkBadInput(ndcontour("solve " + valid + " --tolerance 0.1 --connection paper"),
+                {"--tolerance", "crossing"});
+  // Not reachable above --max-depth: a warning, the run itself succeeds.
+  const Run unreached = ndcontour("solve " + valid + " --depth 3 --max-depth 3 --tolerance 1e-6");
+  CHECK(unreached.status == 0);
+  CHECK(contains(unreached.err, "--tolerance 1e-06 not reached"));
 }
 
 TEST_CASE("cli: bench times each stage and rejects bad settings", "[cli]") {

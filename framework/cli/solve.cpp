@@ -70,6 +70,10 @@ void warn(const Problem& problem, const Summary& s, bool check) {
   if (s.offManifoldVertices > 0)
     std::cerr << file << ": " << s.offManifoldVertices
               << " dual vertices could not be projected onto M\n";
+  if (s.settings.tolerance > 0 && s.mesh.maxChordError > s.settings.tolerance)
+    std::cerr << file << ": --tolerance " << s.settings.tolerance
+              << " not reached: max chord error " << s.mesh.maxChordError << " (limit: --max-depth "
+              << s.topology.maxDepth << " or the leaf budget, docs/certificate.md)\n";
   if (s.perturbation.degenerateCrossings > 0)
     std::cerr << file << ": " << s.perturbation.degenerateCrossings
               << " crossings are within rounding of a grid face after " << s.perturbation.attempts
@@ -163,7 +167,6 @@ void armBudgets(const SolveOptions& options, const Problem& problem) {
 }  // namespace
 
 int runSolve(SolveOptions options, const Problem& problem) {
-  if (options.tolerance) options.settings.depth = depthForTolerance(problem, *options.tolerance);
   if (options.outDir) checkWritable(*options.outDir);
   installInterruptCleanup();
   armBudgets(options, problem);

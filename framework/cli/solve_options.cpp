@@ -54,15 +54,14 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
   solve.add_option("problem", o.problemPath, "Problem file (TOML, design.md 4.1)")
       ->required()
       ->type_name("PROBLEM.toml");
-  CLI::Option* depth =
-      solve.add_option("--depth", s.depth, "Subdivision depth L: 2^L cells per axis")
-          ->type_name("L")
-          ->capture_default_str();
+  solve.add_option("--depth", s.depth, "Subdivision depth L: 2^L cells per axis")
+      ->type_name("L")
+      ->capture_default_str();
   solve
       .add_option("--tolerance", o.tolerance,
-                  "Cell size h: the smallest depth whose cells are no wider than h")
-      ->type_name("h")
-      ->excludes(depth);
+                  "Chord error h: refine the grid (adaptively, down to --max-depth) where the "
+                  "mesh lies farther than h from M; --depth stays the base resolution")
+      ->type_name("h");
   solve
       .add_option("--max-depth", s.maxDepth,
                   "Deepest level adaptive refinement may reach where a cell's topology "
@@ -148,6 +147,9 @@ void validateSolveOptions(SolveOptions& o) {
 
   if (o.tolerance && !(std::isfinite(*o.tolerance) && *o.tolerance > 0))
     throw UsageError("--tolerance must be a positive finite number");
+  if (o.tolerance && s.connection != "crossing")
+    throw UsageError("--tolerance needs --connection crossing (the only one that refines)");
+  if (o.tolerance) s.tolerance = *o.tolerance;
   if (s.timeoutSeconds && !(*s.timeoutSeconds > 0 && *s.timeoutSeconds <= kMaxTimeoutSeconds))
     throw UsageError("--timeout must be a positive number of seconds, at most a year");
   if (!o.maxMemory.empty()) {

@@ -48,7 +48,7 @@ struct SolveOptions {
   /// defaults as in Settings.
   Settings settings;
   std::optional<unsigned> precision;  ///< `--precision BITS` as given (before defaulting)
-  std::optional<double> tolerance;    ///< `--tolerance h`: unset lets the pipeline choose
+  std::optional<double> tolerance;    ///< `--tolerance h`: the chord error target (settings)
   /// `--out DIR`: write summary.json, mesh.ply, cells.csv, singular.csv
   std::optional<std::string> outDir;
   bool json = false;      ///< `--json`: the summary on standard output, nothing else
