@@ -316,6 +316,32 @@ bool isKnownFailure(const std::string& name) {
   return std::find(kKnownFailures.begin(), kKnownFailures.end(), name) != kKnownFailures.end();
 }
 
+/// Closed manifolds whose runs at these depths (double, and MPFR where it runs that depth) are
+/// right but not certified at default
+/// settings (docs/certificate.md, "Status"); every other closed run must be certified.
+/// - Tangency along a curve: the ring tori's top circle lies in a grid plane (z = 0.25 on
+///   [-1, 1]^3), the torus graph in R^4 and the flat torus in R^6 touch grid planes along
+///   circles. No refinement separates the two crossings M_c makes there.
+/// - The leaf budget: the sphere in R^6 at depth 3 and the rotated curves in R^5 and R^7 at
+///   depth 4 (graph tests that need one more level on every cell, 2^n children each).
+const std::vector<std::pair<std::string, int>> kUncertified = {{"torus-n3-0.5-0.25", 4},
+                                                               {"torus-n3-0.5-0.25", 5},
+                                                               {"torus-n3-0.625-0.25", 4},
+                                                               {"torus-n3-0.625-0.25", 5},
+                                                               {"torus-n4-0.5-0.25-graph", 4},
+                                                               {"torus-n4-0.5-0.25-graph", 5},
+                                                               {"torus-n4-0.5-0.25-graph-rot12", 4},
+                                                               {"flat-torus-n6", 3},
+                                                               {"flat-torus-n6", 4},
+                                                               {"sphere-n6-r0.5-lift", 3},
+                                                               {"lifted-circle-n5-rot5", 4},
+                                                               {"lifted-circle-n7-rot6", 4}};
+
+bool knownUncertified(const std::string& name, int depth) {
+  return std::find(kUncertified.begin(), kUncertified.end(), std::pair{name, depth}) !=
+         kUncertified.end();
+}
+
 Case caseA(Manifold m, std::vector<int> depths, std::optional<int> mpfr = {}, bool slow = false) {
   Case c;
   c.name = m.name;
@@ -556,6 +582,10 @@ void check(const Case& c, const Problem& problem, const RunResult& r) {
     CHECK(m.nonmanifoldEdges == 0);
     if (t.closed) CHECK(m.boundaryEdges == 0);
   }
+  // Deliverable of the certificate: every closed manifold of the corpus certified at default
+  // settings, but the runs listed with their cause.
+  if (t.closed && !knownUncertified(c.name, r.summary.settings.depth))
+    CHECK(r.summary.topology.certified);
   if (t.closed) return;
 
   // Open M: its boundary lies on the domain boundary, so every boundary vertex is within one
