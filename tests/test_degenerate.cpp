@@ -317,18 +317,20 @@ bool isKnownFailure(const std::string& name) {
 }
 
 /// Closed manifolds whose runs at these depths (double, and MPFR where it runs that depth) are
-/// right but not certified at default
-/// settings (docs/certificate.md, "Status"); every other closed run must be certified.
-/// - Tangency along a curve: the ring tori's top circle lies in a grid plane (z = 0.25 on
-///   [-1, 1]^3), the torus graph in R^4 and the flat torus in R^6 touch grid planes along
-///   circles. No refinement separates the two crossings M_c makes there.
-/// - The leaf budget: the sphere in R^6 at depth 3 and the rotated curves in R^5 and R^7 at
-///   depth 4 (graph tests that need one more level on every cell, 2^n children each).
-const std::vector<std::pair<std::string, int>> kUncertified = {{"torus-n3-0.5-0.25", 4},
-                                                               {"torus-n3-0.5-0.25", 5},
-                                                               {"torus-n3-0.625-0.25", 4},
-                                                               {"torus-n3-0.625-0.25", 5},
-                                                               {"torus-n4-0.5-0.25-graph", 4},
+/// right but not certified at default settings (docs/certificate.md, "Status"); every other
+/// closed run must be certified. (The ring tori with their top circle in a grid plane are
+/// certified since the curve blocks.)
+/// - Tangency along a curve that also meets grid lines or vertices: the torus graph in R^4
+///   and the flat torus in R^6 touch grid planes along circles through grid vertices.
+/// - The leaf budget: the rotated torus graph in R^4, the sphere in R^6 at depth 3 and the
+///   rotated curves in R^5 and R^7 at depth 4 (graph tests that need one more level on every
+///   cell, 2^n children each).
+/// - In MPFR only, the ring torus at depth 4: its bottom circle touches the grid line
+///   x = -0.5, y = 0 in the plane z = -0.25, where F vanishes to fourth order along the grid
+///   edge; the curve blocks next to it do not stand (in double they do, the leaves come in
+///   another order).
+const std::vector<std::pair<std::string, int>> kUncertifiedMpfr = {{"torus-n3-0.5-0.25", 4}};
+const std::vector<std::pair<std::string, int>> kUncertified = {{"torus-n4-0.5-0.25-graph", 4},
                                                                {"torus-n4-0.5-0.25-graph", 5},
                                                                {"torus-n4-0.5-0.25-graph-rot12", 4},
                                                                {"flat-torus-n6", 3},
@@ -337,9 +339,15 @@ const std::vector<std::pair<std::string, int>> kUncertified = {{"torus-n3-0.5-0.
                                                                {"lifted-circle-n5-rot5", 4},
                                                                {"lifted-circle-n7-rot6", 4}};
 
+bool listed(const std::vector<std::pair<std::string, int>>& list, const std::string& name,
+            int depth) {
+  return std::find(list.begin(), list.end(), std::pair{name, depth}) != list.end();
+}
+
+template <class S>
 bool knownUncertified(const std::string& name, int depth) {
-  return std::find(kUncertified.begin(), kUncertified.end(), std::pair{name, depth}) !=
-         kUncertified.end();
+  return listed(kUncertified, name, depth) ||
+         (!std::is_same_v<S, double> && listed(kUncertifiedMpfr, name, depth));
 }
 
 Case caseA(Manifold m, std::vector<int> depths, std::optional<int> mpfr = {}, bool slow = false) {
@@ -584,7 +592,7 @@ void check(const Case& c, const Problem& problem, const RunResult& r) {
   }
   // Deliverable of the certificate: every closed manifold of the corpus certified at default
   // settings, but the runs listed with their cause.
-  if (t.closed && !knownUncertified(c.name, r.summary.settings.depth))
+  if (t.closed && !knownUncertified<S>(c.name, r.summary.settings.depth))
     CHECK(r.summary.topology.certified);
   if (t.closed) return;
 

@@ -205,11 +205,39 @@ class FaceSolver {
     }
     if (clearsRange(patch, S(0), S(0), margin)) return true;
     if (!derivativeHull(patch, 0, margin).containsZero()) return true;
+    // Monotone or root-free pieces with at most one sign change in all: as where the edge
+    // ends on a plane of symmetry of F (dF = 0 there, the root lies inside).
+    int pieces = 64;  // F = 0 along the whole edge would otherwise halve it 2^12 times
+    const int roots = provenRoots(patch, 0, pieces);
+    if (roots == 0 || roots == 1) return true;
     // F >= 0 on the whole edge (it may touch 0, as along a line of M on a grid line): the
     // level set F = -delta of the sign rule does not meet it.
     x[free_[0]] = I(box.lo[0], box.hi[0]);
     const I v = system_.equations()[0].template evaluate<S>(std::span<const I>(x));
     return v.lower() >= 0 || v.upper() < 0;
+  }
+
+  /// The number of roots of F on the edge patch, proven by halving into pieces that are root
+  /// free (coefficients clear 0) or monotone (derivative hull clears 0; then the end signs
+  /// count the root); -1 when a piece stays undecided at 2^-kMaxEdgeDepth of the edge or
+  /// after `pieces` pieces.
+  int provenRoots(const Bernstein<S>& patch, int depth, int& pieces) const {
+    constexpr int kMaxEdgeDepth = 12;
+    const S& margin = margins_[0];
+    if (clearsRange(patch, S(0), S(0), margin)) return 0;
+    if (!derivativeHull(patch, 0, margin).containsZero()) {
+      using std::abs;
+      const auto c = patch.coefficients();
+      if (abs(c.front()) <= margin || abs(c.back()) <= margin) return -1;
+      return (c.front() < 0) != (c.back() < 0) ? 1 : 0;
+    }
+    if (depth >= kMaxEdgeDepth || --pieces < 0) return -1;
+    Bernstein<S> lower, upper;
+    patch.halve(0, lower, upper);
+    const int a = provenRoots(lower, depth + 1, pieces);
+    if (a < 0) return -1;
+    const int b = provenRoots(upper, depth + 1, pieces);
+    return b < 0 ? -1 : a + b;
   }
 
   std::vector<S> fullPoint(const std::vector<S>& y) const {
@@ -979,6 +1007,32 @@ class AdaptiveCrossing {
     unprovenFaces_.push_back(face);
   }
 
+  /// When the face lies inside exactly one face of the box of the block (level, lo), on one
+  /// of its boundary planes and strictly inside along every other axis: that plane's axis
+  /// (`upper`: the block's upper side). Otherwise -1.
+  int blockFaceAxis(const FaceRef& face, int level, const std::vector<std::int32_t>& lo,
+                    bool& upper) const {
+    const std::int64_t scale = std::int64_t{1} << (face.level - level);
+    int axis = -1;
+    for (int j = 0; j < n_; ++j) {
+      const std::int64_t a = lo[j] * scale, b = (lo[j] + 2) * scale, x = face.corner[j];
+      const bool fixed = j == face.axes[0] || (k_ == 2 && j == face.axes[1]);
+      if (fixed && (x == a || x == b)) {
+        if (axis >= 0) return -1;  // on an edge of the block's box
+        axis = j;
+        upper = x == b;
+        continue;
+      }
+      if (fixed ? (x <= a || x >= b) : (x < a || x + 1 > b)) return -1;
+    }
+    return axis;
+  }
+
+  bool onOneBlockFace(const FaceRef& face, int level, const std::vector<std::int32_t>& lo) const {
+    bool upper = false;
+    return blockFaceAxis(face, level, lo, upper) >= 0;
+  }
+
   /// Whether the face lies inside the block of `level` with lower corner `lo` (not on its
   /// boundary).
   bool inside(const FaceRef& face, int level, const std::vector<std::int32_t>& lo) const {
@@ -1076,19 +1130,52 @@ class AdaptiveCrossing {
     return faceGraph_[leaf] == 1;
   }
 
-  /// The first face (2 a + side) of the box of patches_ that fails the face graph test, or -1.
-  int failingFace() {
+  /// The free axes of a face that fixes axis a.
+  std::vector<int> freeAxes(int a) const {
     std::vector<int> axes;
+    for (int j = 0; j < n_; ++j) {
+      if (j != a) axes.push_back(j);
+    }
+    return axes;
+  }
+
+  /// The faces of the box of patches_ that fail the face graph test, as (fixed axis, upper):
+  /// every one, or (`all` false) the first.
+  std::vector<std::pair<int, bool>> failingFaces(bool all = true) {
+    std::vector<std::pair<int, bool>> failing;
     for (int a = 0; a < n_; ++a) {
-      axes.clear();
-      for (int j = 0; j < n_; ++j) {
-        if (j != a) axes.push_back(j);
-      }
+      const std::vector<int> axes = freeAxes(a);
       for (int side = 0; side < 2; ++side) {
-        if (!faceGraph(a, side == 1, axes)) return 2 * a + side;
+        if (faceGraph(a, side == 1, axes)) continue;
+        failing.emplace_back(a, side == 1);
+        if (!all) return failing;
       }
     }
-    return -1;
+    return failing;
+  }
+
+  /// The first face (2 a + side) of the box of patches_ that fails the face graph test, or -1.
+  int failingFace() {
+    const auto failing = failingFaces(false);
+    return failing.empty() ? -1 : 2 * failing.front().first + int(failing.front().second);
+  }
+
+  /// Face (a, upper) of the block (level, lo) leaf face by leaf face: no unproven face inside
+  /// it (its crossings on the leaf faces' common edges are proven, so the link sees every
+  /// piece of M on it) and each leaf face empty or a graph. Leaves patches_ changed.
+  bool subFacesGraph(int level, const std::vector<std::int32_t>& lo,
+                     const std::vector<std::int32_t>& members, int a, bool upper) {
+    const std::vector<int> axes = freeAxes(a);
+    for (std::int32_t c : members) {
+      if (tree_.index(c)[a] != (upper ? lo[a] + 1 : lo[a])) continue;
+      for (std::int32_t f : unprovenOf_[c]) {
+        bool up = false;
+        if (blockFaceAxis(unprovenFaces_[f], level, lo, up) == a && up == upper) return false;
+      }
+      restrictTo(c);
+      if (!faceGraph(a, upper, axes)) return false;
+    }
+    return true;
   }
 
   /// The graph test of one face of the leaf in patches_ (fixed axis a at its lower or upper
@@ -1148,19 +1235,166 @@ class AdaptiveCrossing {
   /// leaf next to the touching point is simple; the block of 2^n leaves of one level around the
   /// point often is. Certifies such blocks of failing leaves (the first that passes of the
   /// candidates around each leaf); in the mesh a block is one region with one vertex per piece.
+  ///
+  /// Along a curve of tangency (a circle of M in a grid plane) every block is cut by the curve
+  /// where it leaves the block, so an unproven face lies on the block's boundary. Such a
+  /// block is kept *tentatively* when the face lies inside one face of the block's box; it
+  /// stands when the leaves across that face are in blocks too (then the block face is shared
+  /// and the polygons around the unproven face join two block nodes only, which the mesh
+  /// drops) and its link, with every block one node, is one cycle. verifyBlocks dissolves the
+  /// blocks that do not stand until the rest do.
   void mergeBlocks(const std::vector<std::vector<std::int32_t>>& incident) {
-    blocks_.clear();
+    blocks_.clear(), blockLo_.clear(), blockLevel_.clear(), blockSaved_.clear();
+    blockEmpties_.clear();
     block_.assign(tree_.size(), -1);
     unprovenOf_.resize(tree_.size());
+    bool tentative = false;
     for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
       if (!tree_.active(c) || failure_[c] == Failure::kNone || block_[c] >= 0) continue;
       // A leaf whose own graph test fails: the graph test on a block around it would too
       // (a wider box, wider Jacobian enclosures); only refinement can help.
       if (failure_[c] == Failure::kGraph) continue;
-      for (const std::vector<std::int32_t>& lo : blockCandidates(c)) {
-        if (tryBlock(tree_.level(c), lo, incident)) break;
+      const auto candidates = blockCandidates(c);
+      bool made = false;
+      for (const std::vector<std::int32_t>& lo : candidates) {
+        if ((made = tryBlock(tree_.level(c), lo, incident, false))) break;
+      }
+      for (const std::vector<std::int32_t>& lo : made ? decltype(candidates){} : latticeBlocks(c)) {
+        if ((made = tryBlock(tree_.level(c), lo, incident, true))) break;
+      }
+      tentative = tentative || made;
+    }
+    if (tentative) verifyBlocks(incident);
+  }
+
+  /// The blocks for leaf c on a curve of tangency: for each grid plane next to c that holds
+  /// every unproven face next to c, the block that straddles the plane and has even lower
+  /// corners along the other axes (so that the blocks along the curve tile it face to face).
+  std::vector<std::vector<std::int32_t>> latticeBlocks(std::int32_t c) const {
+    const int level = tree_.level(c);
+    const auto ci = tree_.index(c);
+    // (axis, plane index at this level) pairs common to every unproven face.
+    std::vector<std::pair<int, std::int64_t>> common;
+    bool first = true;
+    for (std::int32_t f : unprovenOf_[c]) {
+      const FaceRef& face = unprovenFaces_[f];
+      const int shift = face.level - level;
+      if (shift < 0) return {};
+      std::vector<std::pair<int, std::int64_t>> planes;
+      for (int t = 0; t < k_; ++t) {
+        const int j = face.axes[t];
+        const std::int64_t x = face.corner[j];
+        if ((x & ((std::int64_t{1} << shift) - 1)) != 0) continue;
+        const std::int64_t p = x >> shift;
+        if (p == ci[j] || p == ci[j] + 1) planes.emplace_back(j, p);
+      }
+      if (first)
+        common = planes;
+      else
+        std::erase_if(common, [&](const auto& q) {
+          return std::find(planes.begin(), planes.end(), q) == planes.end();
+        });
+      first = false;
+    }
+    std::vector<std::vector<std::int32_t>> blocks;
+    for (const auto& [axis, plane] : common) {
+      std::vector<std::int32_t> lo(n_);
+      for (int j = 0; j < n_; ++j) lo[j] = ci[j] & ~std::int32_t{1};
+      lo[axis] = static_cast<std::int32_t>(plane - 1);
+      blocks.push_back(std::move(lo));
+    }
+    return blocks;
+  }
+
+  /// Dissolves the blocks that do not stand (mergeBlocks) until every remaining one does.
+  void verifyBlocks(const std::vector<std::vector<std::int32_t>>& incident) {
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (std::size_t b = 0; b < blocks_.size(); ++b) {
+        if (blocks_[b].empty() || blockStands(b, incident)) continue;
+        for (std::size_t i = 0; i < blocks_[b].size(); ++i) {
+          block_[blocks_[b][i]] = -1;
+          failure_[blocks_[b][i]] = blockSaved_[b][i];
+        }
+        blocks_[b].clear();
+        changed = true;
       }
     }
+  }
+
+  /// Whether block b stands among the others: every unproven face next to it inside it, or
+  /// inside one face of its box with block leaves across, and its link (every block one node)
+  /// one cycle.
+  bool blockStands(std::size_t b, const std::vector<std::vector<std::int32_t>>& incident) const {
+    const int level = blockLevel_[b];
+    const std::vector<std::int32_t>& lo = blockLo_[b];
+    const auto stands = [&](const std::vector<std::int32_t>& faces) {
+      return std::all_of(faces.begin(), faces.end(), [&](std::int32_t f) {
+        return inside(unprovenFaces_[f], level, lo) ||
+               sharedBlockFace(unprovenFaces_[f], level, lo);
+      });
+    };
+    for (std::int32_t c : blocks_[b]) {
+      if (!stands(unprovenOf_[c])) return false;
+    }
+    for (CellKey key : blockEmpties_[b]) {
+      auto it = unprovenOfEmpty_.find(key);
+      if (it != unprovenOfEmpty_.end() && !stands(it->second)) return false;
+    }
+    std::vector<Polygon> link;
+    std::vector<std::int32_t> ps;
+    const std::int64_t front = blocks_[b].front();
+    for (std::int32_t p : blockPolygons(blocks_[b], incident)) {
+      const Polygon q = collapsed(polygons_[p], [&](std::int64_t node) {
+        return node >= 0 && block_[node] >= 0 ? std::int64_t{blocks_[block_[node]].front()} : node;
+      });
+      if (q.size < (k_ == 1 ? 2 : 3)) continue;  // inside the block, or between two blocks
+      if (std::count(q.node.begin(), q.node.begin() + q.size, front) != 1) return false;
+      ps.push_back(static_cast<std::int32_t>(link.size()));
+      link.push_back(q);
+    }
+    return simpleLink(front, link, ps);
+  }
+
+  /// The polygons incident to any of the leaves, once each.
+  static std::vector<std::int32_t> blockPolygons(
+      const std::vector<std::int32_t>& members,
+      const std::vector<std::vector<std::int32_t>>& incident) {
+    std::vector<std::int32_t> around;
+    for (std::int32_t c : members)
+      around.insert(around.end(), incident[c].begin(), incident[c].end());
+    std::sort(around.begin(), around.end());
+    around.erase(std::unique(around.begin(), around.end()), around.end());
+    return around;
+  }
+
+  /// Whether the face lies inside exactly one face of the block's box (level, lo) and every
+  /// leaf across that face next to it is a leaf of `level` in a block.
+  bool sharedBlockFace(const FaceRef& face, int level, const std::vector<std::int32_t>& lo) const {
+    const int shift = face.level - level;
+    const std::int64_t scale = std::int64_t{1} << shift;
+    bool upper = false;
+    const int axis = blockFaceAxis(face, level, lo, upper);
+    if (axis < 0) return false;
+    // The leaves across: one index along the axis, one or two along the other fixed axis.
+    std::vector<std::int32_t> across(n_);
+    int other = -1;
+    for (int j = 0; j < n_; ++j) {
+      const bool fixed = j == face.axes[0] || (k_ == 2 && j == face.axes[1]);
+      across[j] = static_cast<std::int32_t>(face.corner[j] >> shift);
+      if (j == axis)
+        across[j] = upper ? lo[j] + 2 : lo[j] - 1;
+      else if (fixed && (face.corner[j] & (scale - 1)) == 0)
+        other = j;  // on a leaf plane
+    }
+    for (int s = 0; s < (other >= 0 ? 2 : 1); ++s) {
+      std::vector<std::int32_t> index = across;
+      if (other >= 0) index[other] -= s;
+      const Occupant o = tree_.find(level, index);
+      if (o.kind != Occupant::Kind::kLeaf || tree_.level(o.leaf) != level || block_[o.leaf] < 0)
+        return false;
+    }
+    return true;
   }
 
   /// The lower corners of the blocks of 2^n leaves that hold leaf c, the one centred nearest
@@ -1194,26 +1428,31 @@ class AdaptiveCrossing {
   /// free, one polynomial piece, every unproven face inside it, the crossings on its boundary
   /// one simple piece, and the graph and face graph tests on its box.
   bool tryBlock(int level, const std::vector<std::int32_t>& lo,
-                const std::vector<std::vector<std::int32_t>>& incident) {
+                const std::vector<std::vector<std::int32_t>>& incident, bool tentative) {
     std::vector<std::int32_t> members;
     std::vector<CellKey> empties;
     if (!blockMembers(level, lo, members, empties)) return false;
-    // Every unproven face next to the block's regions lies inside it.
-    const auto within = [&](const std::vector<std::int32_t>& faces) {
-      return std::all_of(faces.begin(), faces.end(),
-                         [&](std::int32_t f) { return inside(unprovenFaces_[f], level, lo); });
+    // Every unproven face next to the block's regions lies inside it (tentative: or inside
+    // one face of its box, for verifyBlocks to check the leaves across).
+    const auto within = [&](const std::vector<std::int32_t>& faces, bool relaxed) {
+      return std::all_of(faces.begin(), faces.end(), [&](std::int32_t f) {
+        return inside(unprovenFaces_[f], level, lo) ||
+               (relaxed && onOneBlockFace(unprovenFaces_[f], level, lo));
+      });
     };
     for (std::int32_t c : members) {
-      if (!within(unprovenOf_[c])) return false;
+      if (!within(unprovenOf_[c], tentative)) return false;
     }
     for (CellKey key : empties) {
       auto it = unprovenOfEmpty_.find(key);
-      if (it != unprovenOfEmpty_.end() && !within(it->second)) return false;
+      if (it != unprovenOfEmpty_.end() && !within(it->second, tentative)) return false;
     }
+    // The link: now, or (tentative) once the neighbour blocks exist, in verifyBlocks.
     std::vector<Polygon> link;
     std::vector<std::int32_t> ps;
-    if (!blockLink(members, incident, link, ps)) return false;
-    if (!simpleLink(members.front(), link, ps)) return false;
+    if (!tentative &&
+        (!blockLink(members, incident, link, ps) || !simpleLink(members.front(), link, ps)))
+      return false;
     // The graph tests on the block's box.
     std::vector<std::int32_t> hi(lo);
     for (std::int32_t& i : hi) ++i;
@@ -1223,12 +1462,24 @@ class AdaptiveCrossing {
     margins_ = rf.margins;
     for (int i = 0; i < m_; ++i) patches_[i] = rf.forms[i].restrict(box);
     if (!patchesGraph() && !intervalEmpty(box, true)) return false;
-    if (k_ == 2 && failingFace() >= 0) return false;
+    if (k_ == 2) {
+      // A face of the block's box that fails as a whole: a tentative block may prove it leaf
+      // face by leaf face (subFacesGraph).
+      for (const auto& [a, upper] : failingFaces()) {
+        if (!tentative || !subFacesGraph(level, lo, members, a, upper)) return false;
+      }
+    }
+    std::vector<Failure> saved;
     for (std::int32_t c : members) {
       block_[c] = static_cast<std::int32_t>(blocks_.size());
+      saved.push_back(failure_[c]);
       failure_[c] = Failure::kNone;
     }
     blocks_.push_back(std::move(members));
+    blockLo_.push_back(lo);
+    blockLevel_.push_back(level);
+    blockEmpties_.push_back(std::move(empties));
+    blockSaved_.push_back(std::move(saved));
     return true;
   }
 
@@ -1266,12 +1517,7 @@ class AdaptiveCrossing {
   bool blockLink(const std::vector<std::int32_t>& members,
                  const std::vector<std::vector<std::int32_t>>& incident, std::vector<Polygon>& link,
                  std::vector<std::int32_t>& ps) const {
-    std::vector<std::int32_t> around;
-    for (std::int32_t c : members)
-      around.insert(around.end(), incident[c].begin(), incident[c].end());
-    std::sort(around.begin(), around.end());
-    around.erase(std::unique(around.begin(), around.end()), around.end());
-    for (std::int32_t p : around) {
+    for (std::int32_t p : blockPolygons(members, incident)) {
       const Polygon q = collapsed(polygons_[p], [&](std::int64_t node) {
         return std::find(members.begin(), members.end(), node) != members.end() ? members.front()
                                                                                 : node;
@@ -1719,6 +1965,12 @@ class AdaptiveCrossing {
   std::unordered_map<CellKey, std::vector<std::int32_t>> unprovenOfEmpty_;  ///< per empty cell
   std::vector<std::vector<std::int32_t>> blocks_;  ///< the leaves of certified blocks
   std::vector<std::int32_t> block_;                ///< per leaf: its block, or -1
+  /// Per block: its lower corner and level, and its leaves' failures before it (to dissolve
+  /// it); a dissolved block has no leaves.
+  std::vector<std::vector<std::int32_t>> blockLo_;
+  std::vector<int> blockLevel_;
+  std::vector<std::vector<CellKey>> blockEmpties_;  ///< its base cells the bounding excluded
+  std::vector<std::vector<Failure>> blockSaved_;
   std::int64_t refined_ = 0;
   std::size_t maxLeaves_ = 0;
   bool refining_ = true;  ///< false: certify the base grid only (run's fallback)
