@@ -1465,7 +1465,7 @@ class AdaptiveCrossing {
     if (k_ == 2) {
       // A face of the block's box that fails as a whole: a tentative block may prove it leaf
       // face by leaf face (subFacesGraph).
-      for (const auto& [a, upper] : failingFaces()) {
+      for (const auto& [a, upper] : failingFaces(tentative)) {
         if (!tentative || !subFacesGraph(level, lo, members, a, upper)) return false;
       }
     }
