@@ -1,4 +1,4 @@
-// The analysis stage (design.md 4.3): welding, topology and accuracy of a complex.
+// The analysis stage (docs/contracts.md 4.3): welding, topology and accuracy of a complex.
 //
 // Welding: vertices closer than `tolerance` (Euclidean, in the coordinates) merge into the
 // first of them (its coordinates are kept, not averaged, so a welded vertex is still a
@@ -233,7 +233,7 @@ MeshStats analyse(const Complex<S>& welded, const System<S>& system, const Proje
     }
     stats.eulerCharacteristic = stats.vertices - stats.edges + stats.triangles;
   } else if (k >= 3) {
-    // Beyond design.md 4.3: triangles are the distinct 2-faces, boundary / non-manifold count
+    // Beyond docs/contracts.md 4.3: triangles are the distinct 2-faces, boundary / non-manifold count
     // the (k-1)-faces of one / three or more simplices, and chi is the full alternating sum.
     std::int64_t chi = stats.vertices - stats.edges;
     std::vector<std::int32_t> chosen;

@@ -16,7 +16,7 @@ namespace ndc {
 template <class S>
 Complex<S> weld(const Complex<S>& complex, double tolerance);
 
-/// Every `mesh` and `accuracy` field of design.md 4.3 for a welded complex: vertices, edges,
+/// Every `mesh` and `accuracy` field of docs/contracts.md 4.3 for a welded complex: vertices, edges,
 /// triangles, components, boundary and non-manifold edges, Euler characteristic, open ends,
 /// branch vertices, max residual over vertices, max chord error (midpoints or centroids
 /// projected with `project`).

@@ -31,7 +31,7 @@ struct RationalMap {
 /// The application part of a problem.
 struct ApplicationData {
   std::string name;   ///< convex-hull, sweep-silhouette, bisector, sweep-envelope, blending
-  RationalMap image;  ///< mesh.ply x y z (design.md 4.4: "the application's map to R^3")
+  RationalMap image;  ///< mesh.ply x y z (docs/contracts.md 4.4: "the application's map to R^3")
   /// convex-hull: the other end of each bitangent segment (S(s, t)), written as x2 y2 z2 and
   /// used for ruled.ply.
   std::optional<RationalMap> secondImage;

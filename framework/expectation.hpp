@@ -1,6 +1,6 @@
 /// \file expectation.hpp
 /// The comparison of a problem's `[expect]` table with the mesh statistics of a run (`expect` in
-/// summary.json, design.md 4.5; `solve --check`; the `expect_ok` column of experiments).
+/// summary.json, docs/contracts.md 4.5; `solve --check`; the `expect_ok` column of experiments).
 #pragma once
 
 #include <array>
@@ -14,7 +14,7 @@
 namespace ndc {
 
 /// The `[expect]` keys that are compared with the mesh: the integer `mesh` fields of
-/// summary.json (design.md 4.3) by the same names, and `genus`.
+/// summary.json (docs/contracts.md 4.3) by the same names, and `genus`.
 inline constexpr std::array<std::string_view, 11> kExpectKeys = {
     "components",     "euler_characteristic", "vertices",          "edges",     "triangles",
     "boundary_edges", "boundary_components",  "nonmanifold_edges", "open_ends", "branch_vertices",

@@ -95,7 +95,7 @@ inline constexpr std::array<std::string_view, 22> kExperimentRunColumns = {
     "expect_ok",
     "expect_notes"};
 
-/// The numeric summary.json fields (design.md 4.3, and the counts of 4.5) that follow, flattened
+/// The numeric summary.json fields (docs/contracts.md 4.3, and the counts of 4.5) that follow, flattened
 /// with dotted names. Numeric fields a later summary schema adds come after these, sorted by
 /// name; list elements (singular points, the perturbation level) and `expect` (see
 /// `expect_ok`) are left out.

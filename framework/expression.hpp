@@ -1,5 +1,5 @@
 /// \file expression.hpp
-/// Polynomial expressions (design.md 4.1): parsing to a syntax tree and evaluation in plain,
+/// Polynomial expressions (docs/contracts.md 4.1): parsing to a syntax tree and evaluation in plain,
 /// interval and Bernstein arithmetic, with or without gradients.
 #pragma once
 

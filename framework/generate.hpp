@@ -22,7 +22,7 @@ inline constexpr std::array<std::string_view, 2> kGeneratorNames = {"rotated-cir
 /// Largest ambient dimension a generator accepts (3^n Bernstein coefficients per equation).
 inline constexpr int kMaxGeneratedDimension = 12;
 
-/// A generated problem: its problem file text (design.md 4.1) and the embedding it encodes.
+/// A generated problem: its problem file text (docs/contracts.md 4.1) and the embedding it encodes.
 struct GeneratedProblem {
   std::string name;  ///< `<generator>-n<n>-s<seed>`, e.g. `rotated-circle-n5-s3`
   std::string text;  ///< the TOML problem file

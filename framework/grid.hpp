@@ -1,6 +1,6 @@
 /// \file grid.hpp
 /// The uniform grid of the subdivision's final depth: 2^L cells per axis, cells named by
-/// integer multi-indices and kept in a hash map keyed by the packed index (design.md 2).
+/// integer multi-indices and kept in a hash map keyed by the packed index (docs/algorithm1.md).
 #pragma once
 
 #include <cstdint>

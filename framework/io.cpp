@@ -166,7 +166,7 @@ std::string toJson(const Summary& s) {
   o << "  \"diagnostics\": {\"ambiguous_cells\": " << s.ambiguousCells
     << ", \"singular_cells\": " << s.singularCells << ", \"chord_failures\": " << m.chordFailures
     << ", \"off_manifold_vertices\": " << s.offManifoldVertices;
-  // Extensions (design.md 4.5): located singular points and the crossing's perturbation.
+  // Extensions (docs/contracts.md 4.5): located singular points and the crossing's perturbation.
   o << ",\n    \"singular_points\": [";
   for (std::size_t i = 0; i < s.singularPoints.size(); ++i) {
     const SingularPoint& p = s.singularPoints[i];
@@ -194,7 +194,7 @@ std::string toJson(const Summary& s) {
   o << ",\n  \"budget\": {\"max_memory_bytes\": " << number(s.memoryBudget)
     << ", \"estimated_memory_bytes\": " << number(s.estimatedMemory)
     << ", \"timeout_s\": " << (t.timeoutSeconds ? number(*t.timeoutSeconds) : "null") << "}";
-  // Extension (design.md 4.5): the problem's [expect] compared with the mesh, when it has one.
+  // Extension (docs/contracts.md 4.5): the problem's [expect] compared with the mesh, when it has one.
   if (!s.expect.empty()) {
     o << ",\n  \"expect\": {";
     for (std::size_t i = 0; i < s.expect.size(); ++i) {

@@ -1,5 +1,5 @@
 /// \file io.hpp
-/// Output files of a run (design.md 4.3-4.5): summary.json, mesh.ply, cells.csv and
+/// Output files of a run (docs/contracts.md 4.3-4.5): summary.json, mesh.ply, cells.csv and
 /// singular.csv.
 #pragma once
 

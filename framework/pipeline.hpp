@@ -1,5 +1,5 @@
 /// \file pipeline.hpp
-/// The pipeline of design.md 2 (paper, Algorithm 1): problem -> subdivision with bounding ->
+/// The pipeline of docs/algorithm1.md (paper, Algorithm 1): problem -> subdivision with bounding ->
 /// solution cells -> projection -> classification -> connection -> complex -> analysis.
 #pragma once
 

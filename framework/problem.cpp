@@ -1,4 +1,4 @@
-// Problem files (design.md 4.1): reading, validation and error positions.
+// Problem files (docs/contracts.md 4.1): reading, validation and error positions.
 #include "problem.hpp"
 
 #include <toml++/toml.h>

@@ -1,5 +1,5 @@
 /// \file problem.hpp
-/// Problem files (design.md 4.1): TOML with variables, a box domain and equations.
+/// Problem files (docs/contracts.md 4.1): TOML with variables, a box domain and equations.
 #pragma once
 
 #include <cstddef>

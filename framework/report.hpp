@@ -165,7 +165,7 @@ std::string renderGnuplot(const std::filesystem::path& dir, const std::string& i
 
 // --- Reading run outputs -----------------------------------------------------------------------
 
-/// A mesh read from an ASCII `mesh.ply` (design.md 4.4): per vertex `x y z` and the point in
+/// A mesh read from an ASCII `mesh.ply` (docs/contracts.md 4.4): per vertex `x y z` and the point in
 /// R^n, and segments (k = 1) or triangles (k = 2) as vertex indices.
 struct PlyMesh {
   std::vector<std::array<double, 3>> xyz;   ///< the 3-D image of each vertex

@@ -1,6 +1,6 @@
 /// \file singular.hpp
 /// Singular points of M: where the m x n Jacobian J of the constraints loses rank on the zero
-/// set (design.md 4.5 `diagnostics.singular_points` and section 6; see docs/singular.md).
+/// set (docs/contracts.md 4.5 `diagnostics.singular_points` and section 6; see docs/singular.md).
 ///
 /// Notation: F = (F_1..F_m) the constraints, J = DF (m x n), M = {F = 0} in the domain D,
 /// sigma_min(J) and sigma_max(J) its extreme singular values. A point x of M is *singular*

@@ -1,5 +1,5 @@
 /// \file strategy.hpp
-/// The five strategy families of the pipeline (design.md 2) as C++20 concepts. Each family
+/// The five strategy families of the pipeline (docs/algorithm1.md) as C++20 concepts. Each family
 /// has plain `final` implementations in strategies/(family)/ and one closed std::variant with
 /// a `create...(name)` that rejects unknown names. Strategies are dispatched once per box and
 /// per stage (std::visit outside the loops), never per coefficient.

@@ -1,5 +1,5 @@
 /// \file summary.hpp
-/// Run settings and the run summary: the `summary.json` contract (design.md 4.3).
+/// Run settings and the run summary: the `summary.json` contract (docs/contracts.md 4.3).
 #pragma once
 
 #include <cstdint>
@@ -130,7 +130,7 @@ struct Summary {
   double memoryBudget = 0, estimatedMemory = 0;
 };
 
-/// summary.json text (schema "ndcontour.summary/1"), field names exactly as design.md 4.3.
+/// summary.json text (schema "ndcontour.summary/1"), field names exactly as docs/contracts.md 4.3.
 std::string toJson(const Summary& summary);
 
 }  // namespace ndc

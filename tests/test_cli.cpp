@@ -1,4 +1,4 @@
-// The command-line tool as a process (design.md 4.2): --help, --version, `info` on every
+// The command-line tool as a process (docs/contracts.md 4.2): --help, --version, `info` on every
 // example, and every class of bad input exits with status 2 and one line on standard error.
 #include <catch2/catch.hpp>
 
@@ -355,7 +355,7 @@ TEST_CASE("cli: solve compares the mesh with [expect]; --check exits 3 on a mism
       {"bad-expect.toml:6:", "expect.components must be an integer"});
 }
 
-TEST_CASE("cli: solve writes singular.csv and the diagnostics of design.md 4.5", "[cli]") {
+TEST_CASE("cli: solve writes singular.csv and the diagnostics of docs/contracts.md 4.5", "[cli]") {
   const std::string valid = quoted(writeProblem("valid.toml", kValid).string());
   const fs::path out = scratch() / "diagnostics-out";
   fs::remove_all(out);

@@ -1,4 +1,4 @@
-// The `crossing` connection (design.md 3, docs/crossing.md) through the whole pipeline
+// The `crossing` connection (docs/crossing.md) through the whole pipeline
 // (ndc::runPipeline): closed smooth curves and surfaces in R^2..R^6 come out closed and
 // manifold with the exact number of components and Euler characteristic, a surface that leaves
 // the domain has boundary only on the domain boundary, Viviani's curve reports its double point,

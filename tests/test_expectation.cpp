@@ -1,5 +1,5 @@
 // The comparison of a problem's [expect] with the mesh (expectation.hpp) and the summary fields
-// and files of design.md 4.5 that carry it, the singular points and the perturbation (io.hpp).
+// and files of docs/contracts.md 4.5 that carry it, the singular points and the perturbation (io.hpp).
 #include <catch2/catch.hpp>
 
 #include <sstream>

@@ -607,7 +607,7 @@ TEST_CASE("experiment: generated problems parse and their sampled points satisfy
 }
 
 TEST_CASE("experiment: summary columns, JSON numbers and SHA-256", "[experiment]") {
-  // Every summary column of the CSV is a numeric field of summary.json (design.md 4.3).
+  // Every summary column of the CSV is a numeric field of summary.json (docs/contracts.md 4.3).
   ndc::Summary summary;
   const auto numbers = ndc::flattenJsonNumbers(ndc::toJson(summary));
   for (const std::string_view column : ndc::kExperimentSummaryColumns) {

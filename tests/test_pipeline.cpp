@@ -1,4 +1,4 @@
-// The whole pipeline (design.md 2, paper Algorithm 1) on known manifolds: every strategy
+// The whole pipeline (docs/algorithm1.md, paper Algorithm 1) on known manifolds: every strategy
 // combination runs on every example problem, the cell counts add up, double and MPFR agree on
 // the cells and their classes, and the vertices lie on M to working precision.
 #include <catch2/catch.hpp>

@@ -1,4 +1,4 @@
-// Problem files (design.md 4.1): the example problems parse, and every class of bad input is an
+// Problem files (docs/contracts.md 4.1): the example problems parse, and every class of bad input is an
 // InputError on one line at the right file position.
 #include <catch2/catch.hpp>
 

@@ -1,4 +1,4 @@
-// The `ndcontour` command-line tool (design.md 4.2). Every error ends the program with one
+// The `ndcontour` command-line tool (docs/contracts.md 4.2). Every error ends the program with one
 // line on standard error: status 2 for bad input or usage, 1 for an internal error; `solve
 // --check` exits 3 when the mesh differs from the problem's [expect] (solve_options.hpp).
 #include <CLI/CLI.hpp>
@@ -32,7 +32,7 @@ int run(int argc, char** argv) {
 
   std::string infoPath;
   CLI::App* info = app.add_subcommand("info", "Describe a problem file");
-  info->add_option("problem", infoPath, "Problem file (TOML, design.md 4.1)")
+  info->add_option("problem", infoPath, "Problem file (TOML, docs/contracts.md 4.1)")
       ->required()
       ->type_name("PROBLEM.toml");
 

@@ -1,5 +1,5 @@
 // `ndcontour solve`: runs the pipeline, compares the mesh with [expect] and writes the outputs
-// of design.md 4.2-4.5.
+// of docs/contracts.md 4.2-4.5.
 #include <unistd.h>
 
 #include <algorithm>
@@ -172,7 +172,7 @@ int runSolve(SolveOptions options, const Problem& problem) {
   armBudgets(options, problem);
   RunResult result = solveWithin(problem, options.settings);
   if (!options.outDir) disarmTimeout();
-  // design.md 4.5: the mesh against the problem's [expect] (none: no `expect` in the summary).
+  // docs/contracts.md 4.5: the mesh against the problem's [expect] (none: no `expect` in the summary).
   result.summary.expect = checkExpectation(problem.expect, result.summary.mesh, result.k);
   const int status =
       options.check && expectationMismatch(result.summary.expect) ? kExitExpectMismatch : kExitOk;

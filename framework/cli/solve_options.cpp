@@ -1,4 +1,4 @@
-// Parsing and validation of the `solve` options (design.md 4.2).
+// Parsing and validation of the `solve` options (docs/contracts.md 4.2).
 #include "cli/solve_options.hpp"
 
 #include <CLI/CLI.hpp>
@@ -51,7 +51,7 @@ CLI::Validator unsignedUpTo(std::uint64_t max) {
 
 void addSolveOptions(CLI::App& solve, SolveOptions& o) {
   Settings& s = o.settings;
-  solve.add_option("problem", o.problemPath, "Problem file (TOML, design.md 4.1)")
+  solve.add_option("problem", o.problemPath, "Problem file (TOML, docs/contracts.md 4.1)")
       ->required()
       ->type_name("PROBLEM.toml");
   solve.add_option("--depth", s.depth, "Subdivision depth L: 2^L cells per axis")

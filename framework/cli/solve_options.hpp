@@ -1,5 +1,5 @@
 /// \file solve_options.hpp
-/// The options of `ndcontour solve` (design.md 4.2), parsed and validated before the pipeline
+/// The options of `ndcontour solve` (docs/contracts.md 4.2), parsed and validated before the pipeline
 /// runs, so that every bad value exits with status 2 and one line on standard error.
 #pragma once
 

@@ -1,5 +1,5 @@
 /// \file classification.hpp
-/// The classification family (design.md 2): the paper's normal / abnormal / failed labels of
+/// The classification family (docs/algorithm1.md): the paper's normal / abnormal / failed labels of
 /// the solution cells (Sec. 4.1, Algorithm 1: "classify whether c is normal or abnormal").
 #pragma once
 

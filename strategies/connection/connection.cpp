@@ -1,4 +1,4 @@
-// The connection family's factory (design.md 2, 4.2 `--connection`).
+// The connection family's factory (docs/algorithm1.md, docs/contracts.md 4.2 `--connection`).
 #include "strategies/connection/connection.hpp"
 
 #include <string>

@@ -1,5 +1,5 @@
 /// \file connection.hpp
-/// The connection family (design.md 2): builds the k-simplices of the complex from the
+/// The connection family (docs/algorithm1.md): builds the k-simplices of the complex from the
 /// projected and classified solution cells (paper Sec. 4.1, 4.2, Algorithm 1). See the page
 /// \ref connection for the rules and the choices made where the paper is vague.
 #pragma once

@@ -1,5 +1,5 @@
 /// \file crossing.hpp
-/// `crossing`: watertight dual contouring in any dimension (design.md 3; beyond the paper).
+/// `crossing`: watertight dual contouring in any dimension (docs/crossing.md; beyond the paper).
 #pragma once
 
 #include "strategy.hpp"

@@ -1,5 +1,5 @@
 /// \file newton.hpp
-/// The projection family (design.md 2): the paper's Newton-Raphson projection of a cell's
+/// The projection family (docs/algorithm1.md): the paper's Newton-Raphson projection of a cell's
 /// point onto the solution manifold M (Sec. 4, Algorithm 1: "apply the Newton-Raphson method
 /// to project the solution point in c into the solution manifold").
 #pragma once
