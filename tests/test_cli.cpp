@@ -9,6 +9,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <regex>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -60,6 +62,54 @@ const std::string kValid =
 fs::path problemsDir() { return fs::path(ndc::test::sourceDir()) / "experiments" / "problems"; }
 
 }  // namespace
+
+namespace {
+
+/// The options a subcommand's `--help` lists in its option table (not those its texts mention).
+std::set<std::string> helpOptions(const std::string& help) {
+  static const std::regex row(R"(^\s+(?:-[a-z],)?(--[a-z][a-z-]*))");
+  std::set<std::string> options;
+  std::istringstream in(help);
+  std::smatch m;
+  for (std::string line; std::getline(in, line);) {
+    if (std::regex_search(line, m, row) && m[1] != "--help") options.insert(m[1]);
+  }
+  return options;
+}
+
+/// The options of the README's usage lines of a subcommand: the lines that start with
+/// `build/bin/ndcontour SUB ` and their indented continuation lines.
+std::set<std::string> readmeOptions(const std::string& sub) {
+  static const std::regex option("--[a-z][a-z-]*");
+  std::ifstream in(fs::path(ndc::test::sourceDir()) / "README.md");
+  const std::string start = "build/bin/ndcontour " + sub + " ";
+  std::set<std::string> options;
+  bool usage = false;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind(start, 0) == 0)
+      usage = true;
+    else if (line.rfind("    ", 0) != 0)
+      usage = false;
+    if (!usage) continue;
+    for (auto it = std::sregex_iterator(line.begin(), line.end(), option);
+         it != std::sregex_iterator(); ++it)
+      options.insert(it->str());
+  }
+  return options;
+}
+
+}  // namespace
+
+TEST_CASE("cli: the README's usage lines name exactly the options of --help", "[cli]") {
+  for (const std::string sub : {"solve", "experiment", "report"}) {
+    INFO("ndcontour " << sub);
+    const Run help = ndcontour(sub + " --help");
+    REQUIRE(help.status == 0);
+    const std::set<std::string> listed = helpOptions(help.out);
+    CHECK(listed.size() >= 2);
+    CHECK(readmeOptions(sub) == listed);
+  }
+}
 
 TEST_CASE("cli: --help and --version", "[cli]") {
   const Run help = ndcontour("--help");
