@@ -1345,9 +1345,7 @@ class AdaptiveCrossing {
     std::vector<std::int32_t> ps;
     const std::int64_t front = blocks_[b].front();
     for (std::int32_t p : blockPolygons(blocks_[b], incident)) {
-      const Polygon q = collapsed(polygons_[p], [&](std::int64_t node) {
-        return node >= 0 && block_[node] >= 0 ? std::int64_t{blocks_[block_[node]].front()} : node;
-      });
+      const Polygon q = collapsed(polygons_[p], [&](std::int64_t node) { return blockNode(node); });
       if (q.size < (k_ == 1 ? 2 : 3)) continue;  // inside the block, or between two blocks
       if (std::count(q.node.begin(), q.node.begin() + q.size, front) != 1) return false;
       ps.push_back(static_cast<std::int32_t>(link.size()));
@@ -1530,6 +1528,12 @@ class AdaptiveCrossing {
     return true;
   }
 
+  /// A polygon node as the mesh sees it: a leaf in a block is the block's first leaf.
+  std::int64_t blockNode(std::int64_t node) const {
+    const bool inBlock = node >= 0 && std::size_t(node) < block_.size() && block_[node] >= 0;
+    return inBlock ? std::int64_t{blocks_[block_[node]].front()} : node;
+  }
+
   /// A polygon with its nodes mapped by `map`, equal neighbours merged (cyclically).
   template <class Map>
   static Polygon collapsed(const Polygon& poly, const Map& map) {
@@ -1552,9 +1556,7 @@ class AdaptiveCrossing {
     if (blocks_.empty() || !certified) return;
     std::vector<Polygon> kept;
     for (const Polygon& p : polygons_) {
-      const Polygon q = collapsed(p, [&](std::int64_t node) {
-        return node >= 0 && block_[node] >= 0 ? std::int64_t{blocks_[block_[node]].front()} : node;
-      });
+      const Polygon q = collapsed(p, [&](std::int64_t node) { return blockNode(node); });
       if (q.size >= (k_ == 1 ? 2 : 3)) kept.push_back(q);
     }
     polygons_ = std::move(kept);
@@ -1656,10 +1658,7 @@ class AdaptiveCrossing {
   /// its crossings, as the dual complex places it (a block's: of the block's crossings).
   std::vector<std::int32_t> chordLeaves() const {
     const std::size_t count = tree_.size();
-    const auto owner = [&](std::int64_t c) -> std::size_t {
-      const std::int32_t b = block_.size() > std::size_t(c) ? block_[c] : -1;
-      return static_cast<std::size_t>(b >= 0 ? blocks_[b].front() : c);
-    };
+    const auto owner = [&](std::int64_t c) { return static_cast<std::size_t>(blockNode(c)); };
     std::vector<S> vertex(count * n_, S(0));
     std::vector<std::int32_t> crossings(count, 0);
     for (const Polygon& poly : polygons_) {
