@@ -621,9 +621,18 @@ class Parser {
     skipSpace();
     if (peek() != '^') return base;
     ++pos_;
+    const int p = static_cast<int>(exponent());
+    // a^0 is the constant 1 (0^0 = 1 as in polynomial algebra). Folding it drops the base,
+    // whose degree the expression's degrees no longer show: an evaluator would otherwise build
+    // the Bernstein form of ((x^10000)^10000)^0, past every size limit (a fuzzing finding).
+    if (p == 0) {
+      auto one = makeNode(ExprNode::Kind::kNumber);
+      setNumber(*one, "1");
+      return one;
+    }
     auto node = makeNode(ExprNode::Kind::kPow);
     node->left = std::move(base);
-    node->exponent = static_cast<int>(exponent());
+    node->exponent = p;
     return node;
   }
 
