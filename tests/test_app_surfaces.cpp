@@ -15,12 +15,13 @@
 #include <string>
 #include <vector>
 
-#include "application.hpp"
-#include "geometry/freeform.hpp"
-#include "pipeline.hpp"
-#include "problem.hpp"
-#include "test_process.hpp"
-#include "test_support.hpp"
+#include "framework/applications/freeform.hpp"
+#include "framework/applications/load.hpp"
+#include "framework/core/application.hpp"
+#include "framework/core/problem.hpp"
+#include "framework/pipeline/pipeline.hpp"
+#include "tests/test_process.hpp"
+#include "tests/test_support.hpp"
 
 namespace fs = std::filesystem;
 

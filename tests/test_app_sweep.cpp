@@ -22,13 +22,14 @@
 #include <string>
 #include <vector>
 
-#include "application.hpp"
-#include "applications/sweep_common.hpp"
-#include "geometry/freeform.hpp"
-#include "pipeline.hpp"
-#include "problem.hpp"
-#include "test_process.hpp"
-#include "test_support.hpp"
+#include "framework/applications/freeform.hpp"
+#include "framework/applications/load.hpp"
+#include "framework/applications/sweep_common.hpp"
+#include "framework/core/application.hpp"
+#include "framework/core/problem.hpp"
+#include "framework/pipeline/pipeline.hpp"
+#include "tests/test_process.hpp"
+#include "tests/test_support.hpp"
 
 namespace fs = std::filesystem;
 

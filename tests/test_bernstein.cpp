@@ -9,8 +9,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include "bernstein.hpp"
-#include "test_support.hpp"
+#include "framework/core/bernstein.hpp"
+#include "tests/test_support.hpp"
 
 namespace {
 

@@ -1,8 +1,8 @@
-// Memory budgets (framework/budget.hpp): sizes as the command line spells them, and the model of
-// the bytes a run needs per solution cell against what runs measure.
+// Memory budgets (framework/core/budget.hpp): sizes as the command line spells them, and the model
+// of the bytes a run needs per solution cell against what runs measure.
 #include <catch2/catch.hpp>
 
-#include "budget.hpp"
+#include "framework/core/budget.hpp"
 
 TEST_CASE("budget: --max-memory sizes", "[budget]") {
   using ndc::parseByteSize;

@@ -10,11 +10,12 @@
 #include <span>
 #include <vector>
 
-#include "framework/interval.hpp"
-#include "framework/problem.hpp"
-#include "framework/system.hpp"
+#include "framework/applications/load.hpp"
+#include "framework/core/interval.hpp"
+#include "framework/core/problem.hpp"
+#include "framework/core/system.hpp"
 #include "strategies/connection/certificate.hpp"
-#include "test_support.hpp"
+#include "tests/test_support.hpp"
 
 namespace {
 

@@ -14,9 +14,10 @@
 #include <sstream>
 #include <string>
 
-#include "problem.hpp"
-#include "test_process.hpp"
-#include "test_support.hpp"
+#include "framework/applications/load.hpp"
+#include "framework/core/problem.hpp"
+#include "tests/test_process.hpp"
+#include "tests/test_support.hpp"
 
 namespace fs = std::filesystem;
 

@@ -17,10 +17,11 @@
 #include <variant>
 #include <vector>
 
-#include "framework/problem.hpp"
-#include "framework/system.hpp"
+#include "framework/applications/load.hpp"
+#include "framework/core/problem.hpp"
+#include "framework/core/system.hpp"
 #include "strategies/connection/connection.hpp"
-#include "test_support.hpp"
+#include "tests/test_support.hpp"
 
 namespace {
 

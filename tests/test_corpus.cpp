@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "test_process.hpp"
-#include "test_support.hpp"
+#include "tests/test_process.hpp"
+#include "tests/test_support.hpp"
 
 namespace fs = std::filesystem;
 

@@ -1,13 +1,14 @@
 // The comparison of a problem's [expect] with the mesh (expectation.hpp) and the summary fields
-// and files of docs/contracts.md 4.5 that carry it, the singular points and the perturbation (io.hpp).
+// and files of docs/contracts.md 4.5 that carry it, the singular points and the perturbation
+// (io.hpp).
 #include <catch2/catch.hpp>
 
 #include <sstream>
 #include <string>
 
-#include "expectation.hpp"
-#include "experiment.hpp"
-#include "io.hpp"
+#include "experiments/runner/experiment.hpp"
+#include "framework/core/expectation.hpp"
+#include "framework/core/io.hpp"
 
 namespace {
 

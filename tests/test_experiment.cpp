@@ -19,12 +19,13 @@
 #include <string>
 #include <vector>
 
-#include "experiment.hpp"
-#include "generate.hpp"
-#include "io.hpp"
-#include "problem.hpp"
-#include "test_process.hpp"
-#include "test_support.hpp"
+#include "experiments/runner/experiment.hpp"
+#include "experiments/runner/generate.hpp"
+#include "framework/applications/load.hpp"
+#include "framework/core/io.hpp"
+#include "framework/core/problem.hpp"
+#include "tests/test_process.hpp"
+#include "tests/test_support.hpp"
 
 namespace fs = std::filesystem;
 

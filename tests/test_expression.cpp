@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "bernstein.hpp"
-#include "expression.hpp"
-#include "test_support.hpp"
+#include "framework/core/bernstein.hpp"
+#include "framework/core/expression.hpp"
+#include "tests/test_support.hpp"
 
 namespace {
 

@@ -12,10 +12,10 @@
 #include <random>
 #include <set>
 
-#include "application.hpp"
-#include "geometry/freeform.hpp"
-#include "pipeline.hpp"
-#include "test_support.hpp"
+#include "framework/applications/freeform.hpp"
+#include "framework/core/application.hpp"
+#include "framework/pipeline/pipeline.hpp"
+#include "tests/test_support.hpp"
 
 using namespace ndc;
 using ndc::test::PrecisionScope;

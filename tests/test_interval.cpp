@@ -7,8 +7,8 @@
 #include <utility>
 #include <vector>
 
-#include "interval.hpp"
-#include "test_support.hpp"
+#include "framework/core/interval.hpp"
+#include "tests/test_support.hpp"
 
 namespace {
 

@@ -10,9 +10,10 @@
 #include <type_traits>
 #include <vector>
 
-#include "pipeline.hpp"
-#include "problem.hpp"
-#include "test_support.hpp"
+#include "framework/applications/load.hpp"
+#include "framework/core/problem.hpp"
+#include "framework/pipeline/pipeline.hpp"
+#include "tests/test_support.hpp"
 
 namespace fs = std::filesystem;
 

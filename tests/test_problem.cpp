@@ -1,13 +1,14 @@
-// Problem files (docs/contracts.md 4.1): the example problems parse, and every class of bad input is an
-// InputError on one line at the right file position.
+// Problem files (docs/contracts.md 4.1): the example problems parse, and every class of bad input
+// is an InputError on one line at the right file position.
 #include <catch2/catch.hpp>
 
 #include <filesystem>
 #include <fstream>
 #include <string>
 
-#include "problem.hpp"
-#include "test_support.hpp"
+#include "framework/applications/load.hpp"
+#include "framework/core/problem.hpp"
+#include "tests/test_support.hpp"
 
 namespace fs = std::filesystem;
 using ndc::InputError;

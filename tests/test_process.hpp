@@ -10,7 +10,7 @@
 #include <sstream>
 #include <string>
 
-#include "test_support.hpp"
+#include "tests/test_support.hpp"
 
 namespace ndc::test {
 

@@ -6,11 +6,11 @@
 #include <string>
 #include <vector>
 
-#include "framework/problem.hpp"
-#include "framework/system.hpp"
+#include "framework/core/problem.hpp"
+#include "framework/core/system.hpp"
 #include "strategies/classification/classification.hpp"
 #include "strategies/projection/newton.hpp"
-#include "test_support.hpp"
+#include "tests/test_support.hpp"
 
 namespace {
 

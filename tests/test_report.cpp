@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "problem.hpp"
-#include "report.hpp"
-#include "test_process.hpp"
+#include "experiments/report/report.hpp"
+#include "framework/core/problem.hpp"
+#include "tests/test_process.hpp"
 
 namespace fs = std::filesystem;
 using namespace ndc::report;

@@ -1,6 +1,6 @@
-// Singular points of M (framework/singular.hpp, docs/singular.md) through the whole pipeline
-// (ndc::runPipeline, default settings): every case checks that a located point lies within one
-// cell width (on every axis) of the true singular point, in double and MPFR (128 bits), and the
+// Singular points of M (framework/pipeline/singular.hpp, docs/singular.md) through the whole
+// pipeline (ndc::runPipeline, default settings): every case checks that a located point lies within
+// one cell width (on every axis) of the true singular point, in double and MPFR (128 bits), and the
 // smooth cases that nothing is reported.
 #include <catch2/catch.hpp>
 
@@ -11,14 +11,15 @@
 #include <string>
 #include <vector>
 
-#include "pipeline.hpp"
-#include "problem.hpp"
-#include "singular.hpp"
+#include "framework/applications/load.hpp"
+#include "framework/core/problem.hpp"
+#include "framework/core/system.hpp"
+#include "framework/pipeline/pipeline.hpp"
+#include "framework/pipeline/singular.hpp"
 #include "strategies/bounding/bounding.hpp"
 #include "strategies/projection/newton.hpp"
 #include "strategies/subdivision/subdivision.hpp"
-#include "system.hpp"
-#include "test_support.hpp"
+#include "tests/test_support.hpp"
 
 namespace fs = std::filesystem;
 

@@ -15,10 +15,11 @@
 #include <string>
 #include <vector>
 
-#include "problem.hpp"
+#include "framework/applications/load.hpp"
+#include "framework/core/problem.hpp"
 #include "strategies/bounding/bounding.hpp"
 #include "strategies/subdivision/subdivision.hpp"
-#include "test_support.hpp"
+#include "tests/test_support.hpp"
 
 namespace {
 

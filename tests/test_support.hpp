@@ -5,8 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "problem.hpp"
-#include "scalar.hpp"
+#include "framework/applications/load.hpp"
+#include "framework/core/problem.hpp"
+#include "framework/core/scalar.hpp"
 
 namespace ndc::test {
 

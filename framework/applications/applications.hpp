@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "geometry/freeform.hpp"
-#include "problem.hpp"
-#include "toml_reader.hpp"
+#include "framework/applications/freeform.hpp"
+#include "framework/core/problem.hpp"
+#include "framework/core/toml_reader.hpp"
 
 namespace ndc {
 
@@ -28,6 +28,10 @@ struct ApplicationInput {
   /// Fails (InputError at the `application` key) with `message`.
   [[noreturn]] void fail(const std::string& message) const;
 };
+
+/// Builds an application problem (`application = "NAME"`) from its parsed document
+/// (ApplicationBuilder of framework/core/toml_reader.hpp); throws InputError.
+Problem buildApplication(const toml::table& root, TomlReader& reader);
 
 /// Convex hull, bitangent planes (Sec. 3.1, equations (1)-(3)): 3 equations in (u, v, s, t).
 Problem buildConvexHull(const ApplicationInput& in);

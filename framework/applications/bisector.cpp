@@ -2,8 +2,8 @@
 // (u, v, s, t), a 2-manifold, after eliminating the bisector point with Cramer's rule.
 #include <memory>
 
-#include "applications/applications.hpp"
-#include "applications/two_surface.hpp"
+#include "framework/applications/applications.hpp"
+#include "framework/applications/two_surface.hpp"
 
 namespace ndc {
 

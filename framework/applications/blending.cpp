@@ -3,8 +3,8 @@
 #include <memory>
 #include <optional>
 
-#include "applications/applications.hpp"
-#include "applications/two_surface.hpp"
+#include "framework/applications/applications.hpp"
+#include "framework/applications/two_surface.hpp"
 
 namespace ndc {
 

@@ -2,8 +2,8 @@
 // equations (1)-(3), 3 equations in (u, v, s, t), a 1-manifold.
 #include <memory>
 
-#include "applications/applications.hpp"
-#include "applications/two_surface.hpp"
+#include "framework/applications/applications.hpp"
+#include "framework/applications/two_surface.hpp"
 
 namespace ndc {
 

@@ -4,7 +4,8 @@
 #include <cmath>
 #include <sstream>
 
-#include "applications/applications.hpp"
+#include "framework/applications/applications.hpp"
+#include "framework/applications/load.hpp"
 
 namespace ndc {
 
@@ -133,8 +134,8 @@ struct Reader {
         }
       }
       // A rational surface is unchanged when all its weights are scaled alike: scale them by a
-      // power of two (exact) so the largest lies in [1, 2), or weights near 1e-300 underflow to 0 in the
-      // products the equations are built from and the run solves garbage.
+      // power of two (exact) so the largest lies in [1, 2), or weights near 1e-300 underflow to 0
+      // in the products the equations are built from and the run solves garbage.
       const double largest = *std::max_element(s.weights.begin(), s.weights.end());
       int exponent = 0;
       std::frexp(largest, &exponent);
@@ -251,6 +252,14 @@ Problem buildApplication(const toml::table& root, TomlReader& reader) {
   reader.fail(app, "unknown application '" + in.application +
                        "' (known: convex-hull, sweep-silhouette, bisector, sweep-envelope, "
                        "blending)");
+}
+
+Problem parseProblem(const std::string& text, const std::string& file) {
+  return parseProblemWith(text, file, buildApplication);
+}
+
+Problem loadProblem(const std::filesystem::path& file) {
+  return parseProblem(readInputFile(file, "problem file"), file.string());
 }
 
 }  // namespace ndc

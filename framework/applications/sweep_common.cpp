@@ -20,14 +20,14 @@
 // cleared: <w P + W M^T (T - E), N> = 0. The image of a solution (u, v, t) is
 //   A(t)[S(u, v)] = M P / (w W) + T = (M P + w W T) / (w W).
 // All of it is formed in Bernstein arithmetic on the input control points (Expression leaves).
-#include "applications/sweep_common.hpp"
+#include "framework/applications/sweep_common.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <memory>
 #include <utility>
 
-#include "application.hpp"
+#include "framework/core/application.hpp"
 
 namespace ndc {
 

@@ -7,9 +7,9 @@
 #include <array>
 #include <vector>
 
-#include "applications/applications.hpp"
-#include "geometry/freeform.hpp"
-#include "problem.hpp"
+#include "framework/applications/applications.hpp"
+#include "framework/applications/freeform.hpp"
+#include "framework/core/problem.hpp"
 
 namespace ndc {
 

@@ -1,8 +1,8 @@
 // General sweep envelope (paper Sec. 3.4): the envelope of A(t)[S(u, v)] for a <= t <= b is the set
 // of points A(t)[S(u, v)] with equation (4), det[A'(t)[S], A(t)[S_u], A(t)[S_v]] = 0; one equation
 // in (u, v, t), a 2-manifold (k = 2). The cleared form and its derivation are in sweep_common.cpp.
-#include "applications/applications.hpp"
-#include "applications/sweep_common.hpp"
+#include "framework/applications/applications.hpp"
+#include "framework/applications/sweep_common.hpp"
 
 namespace ndc {
 

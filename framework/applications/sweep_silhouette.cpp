@@ -2,8 +2,8 @@
 // characteristic curve K_t (equation (4)) that also lie on the silhouette S_t of the instance
 // A(t)[O] seen from the eye point P (equation (5)); two equations in (u, v, t), a 1-manifold
 // (k = 1). The cleared forms and their derivation are in sweep_common.cpp.
-#include "applications/applications.hpp"
-#include "applications/sweep_common.hpp"
+#include "framework/applications/applications.hpp"
+#include "framework/applications/sweep_common.hpp"
 
 namespace ndc {
 

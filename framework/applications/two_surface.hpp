@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "application.hpp"
-#include "applications/applications.hpp"
-#include "geometry/freeform.hpp"
-#include "problem.hpp"
+#include "framework/applications/applications.hpp"
+#include "framework/applications/freeform.hpp"
+#include "framework/core/application.hpp"
+#include "framework/core/problem.hpp"
 
 namespace ndc::twosurface {
 

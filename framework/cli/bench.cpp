@@ -7,8 +7,9 @@
 #include <limits>
 #include <vector>
 
-#include "cli/commands.hpp"
-#include "pipeline.hpp"
+#include "framework/applications/load.hpp"
+#include "framework/cli/commands.hpp"
+#include "framework/pipeline/pipeline.hpp"
 
 namespace ndc::cli {
 namespace {

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "cli/solve_options.hpp"
-#include "problem.hpp"
+#include "framework/cli/solve_options.hpp"
+#include "framework/core/problem.hpp"
 
 namespace ndc::cli {
 

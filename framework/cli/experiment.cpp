@@ -1,12 +1,12 @@
-// `ndcontour experiment`: runs an experiment config (framework/experiment.hpp).
-#include "cli/experiment.hpp"
+// `ndcontour experiment`: runs an experiment config (experiments/runner/experiment.hpp).
+#include "framework/cli/experiment.hpp"
 
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <thread>
 
-#include "framework/experiment.hpp"
+#include "experiments/runner/experiment.hpp"
 
 namespace ndc::cli {
 

@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "cli/commands.hpp"
+#include "framework/cli/commands.hpp"
 
 namespace ndc::cli {
 

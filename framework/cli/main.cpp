@@ -7,22 +7,18 @@
 #include <string>
 #include <vector>
 
-#include "cli/commands.hpp"
-#include "cli/experiment.hpp"
-#include "cli/report.hpp"
-#include "cli/solve_options.hpp"
-#include "problem.hpp"
+#include "framework/applications/load.hpp"
+#include "framework/cli/commands.hpp"
+#include "framework/cli/experiment.hpp"
+#include "framework/cli/report.hpp"
+#include "framework/cli/solve_options.hpp"
+#include "framework/core/problem.hpp"
 
 namespace {
 
+using ndc::oneLine;
 using ndc::cli::kExitBadInput;
 using ndc::cli::kExitInternal;
-
-std::string oneLine(std::string text) {
-  for (char& c : text)
-    if (c == '\n' || c == '\r') c = ' ';
-  return text;
-}
 
 int run(int argc, char** argv) {
   CLI::App app{"ndcontour: contouring 1- and 2-manifolds in arbitrary dimensions", "ndcontour"};

@@ -1,11 +1,11 @@
 // `ndcontour report` (issue 6): see cli/report.hpp and report.hpp.
-#include "cli/report.hpp"
+#include "framework/cli/report.hpp"
 
 #include <CLI/CLI.hpp>
 
 #include <iostream>
 
-#include "../report.hpp"  // framework/report.hpp (not cli/report.hpp)
+#include "experiments/report/report.hpp"
 
 namespace ndc::cli {
 

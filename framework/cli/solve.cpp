@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "budget.hpp"
-#include "cli/commands.hpp"
-#include "expectation.hpp"
-#include "io.hpp"
-#include "pipeline.hpp"
+#include "framework/cli/commands.hpp"
+#include "framework/core/budget.hpp"
+#include "framework/core/expectation.hpp"
+#include "framework/core/io.hpp"
+#include "framework/pipeline/pipeline.hpp"
 
 namespace ndc::cli {
 namespace {
@@ -172,7 +172,8 @@ int runSolve(SolveOptions options, const Problem& problem) {
   armBudgets(options, problem);
   RunResult result = solveWithin(problem, options.settings);
   if (!options.outDir) disarmTimeout();
-  // docs/contracts.md 4.5: the mesh against the problem's [expect] (none: no `expect` in the summary).
+  // docs/contracts.md 4.5: the mesh against the problem's [expect] (none: no `expect` in the
+  // summary).
   result.summary.expect = checkExpectation(problem.expect, result.summary.mesh, result.k);
   const int status =
       options.check && expectationMismatch(result.summary.expect) ? kExitExpectMismatch : kExitOk;

@@ -1,5 +1,5 @@
 // Parsing and validation of the `solve` options (docs/contracts.md 4.2).
-#include "cli/solve_options.hpp"
+#include "framework/cli/solve_options.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -10,9 +10,13 @@
 #include <filesystem>
 #include <limits>
 
-#include "budget.hpp"
-#include "grid.hpp"
-#include "pipeline.hpp"
+#include "framework/core/budget.hpp"
+#include "framework/core/grid.hpp"
+#include "framework/pipeline/pipeline.hpp"
+#include "strategies/bounding/bounding.hpp"
+#include "strategies/classification/classification.hpp"
+#include "strategies/connection/connection.hpp"
+#include "strategies/subdivision/subdivision.hpp"
 
 namespace ndc::cli {
 

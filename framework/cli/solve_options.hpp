@@ -1,6 +1,6 @@
 /// \file solve_options.hpp
-/// The options of `ndcontour solve` (docs/contracts.md 4.2), parsed and validated before the pipeline
-/// runs, so that every bad value exits with status 2 and one line on standard error.
+/// The options of `ndcontour solve` (docs/contracts.md 4.2), parsed and validated before the
+/// pipeline runs, so that every bad value exits with status 2 and one line on standard error.
 #pragma once
 
 #include <array>
@@ -10,8 +10,8 @@
 #include <string>
 #include <string_view>
 
-#include "problem.hpp"
-#include "summary.hpp"
+#include "framework/core/problem.hpp"
+#include "framework/core/summary.hpp"
 
 namespace CLI {
 class App;
@@ -20,26 +20,12 @@ class Validator;
 
 namespace ndc::cli {
 
-/// A bad command line (unknown strategy, value out of range, ...). The CLI prints
-/// `ndcontour: what()` and exits with status 2, like InputError.
-class UsageError : public std::runtime_error {
- public:
-  explicit UsageError(const std::string& message) : std::runtime_error(message) {}
-};
+/// A bad command line: ndc::UsageError (framework/core/errors.hpp).
+using ndc::UsageError;
 
-/// Names accepted on the command line for each strategy family and the scalar type.
-inline constexpr std::array<std::string_view, 3> kBoundingNames = {"bernstein", "interval",
-                                                                   "linearized"};
-inline constexpr std::array<std::string_view, 2> kSubdivisionNames = {"uniform", "binary"};
-inline constexpr std::array<std::string_view, 1> kClassificationNames = {"paper"};
-inline constexpr std::array<std::string_view, 3> kConnectionNames = {"paper", "naive", "crossing"};
-inline constexpr std::array<std::string_view, 2> kScalarNames = {"double", "mpfr"};
-
-/// Accepted ranges of the numeric options.
-inline constexpr int kMinDepth = 1, kMaxDepth = 30;
-inline constexpr unsigned kMinPrecision = 24, kMaxPrecision = 4096;
-/// Working precision of `--scalar mpfr` when `--precision` is not given.
-inline constexpr unsigned kDefaultMpfrPrecision = 128;
+// The names each strategy family accepts are the strategies' own lists (ndc::kBoundingNames
+// and so on); the scalar names and the numeric ranges are the pipeline's
+// (framework/pipeline/pipeline.hpp).
 
 /// Everything `ndcontour solve` was asked to do.
 struct SolveOptions {

@@ -1,7 +1,7 @@
 /// \file bounding.hpp
 /// The bounding strategies of the subdivision stage (paper Sec. 4, ZeroSetSubdiv in step (1)
 /// of Algorithm 1): can a box contain a common zero of every F_i? Models of the concept
-/// BoundingStrategy (framework/strategy.hpp), chosen at run time by name.
+/// BoundingStrategy (framework/core/strategy.hpp), chosen at run time by name.
 #pragma once
 
 #include <array>
@@ -9,13 +9,13 @@
 #include <variant>
 #include <vector>
 
-#include "bernstein.hpp"
-#include "box.hpp"
-#include "expression.hpp"
-#include "interval.hpp"
-#include "problem.hpp"
-#include "scalar.hpp"
-#include "strategy.hpp"
+#include "framework/core/bernstein.hpp"
+#include "framework/core/box.hpp"
+#include "framework/core/expression.hpp"
+#include "framework/core/interval.hpp"
+#include "framework/core/problem.hpp"
+#include "framework/core/scalar.hpp"
+#include "framework/core/strategy.hpp"
 
 namespace ndc {
 

@@ -2,7 +2,7 @@
 
 #include <string>
 
-#include "framework/problem.hpp"
+#include "framework/core/errors.hpp"
 
 namespace ndc {
 

@@ -9,11 +9,11 @@
 #include <variant>
 #include <vector>
 
-#include "framework/box.hpp"
-#include "framework/complex.hpp"
-#include "framework/grid.hpp"
-#include "framework/scalar.hpp"
-#include "framework/strategy.hpp"
+#include "framework/core/box.hpp"
+#include "framework/core/complex.hpp"
+#include "framework/core/grid.hpp"
+#include "framework/core/scalar.hpp"
+#include "framework/core/strategy.hpp"
 
 namespace ndc {
 

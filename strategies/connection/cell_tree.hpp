@@ -9,7 +9,7 @@
 #include <unordered_set>
 #include <vector>
 
-#include "framework/grid.hpp"
+#include "framework/core/grid.hpp"
 
 namespace ndc {
 

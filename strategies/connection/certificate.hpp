@@ -8,9 +8,9 @@
 #include <span>
 #include <vector>
 
-#include "framework/bernstein.hpp"
-#include "framework/interval.hpp"
-#include "framework/system.hpp"
+#include "framework/core/bernstein.hpp"
+#include "framework/core/interval.hpp"
+#include "framework/core/system.hpp"
 
 namespace ndc {
 

@@ -8,8 +8,8 @@
 #include <string_view>
 #include <variant>
 
-#include "framework/scalar.hpp"
-#include "framework/strategy.hpp"
+#include "framework/core/scalar.hpp"
+#include "framework/core/strategy.hpp"
 #include "strategies/connection/crossing.hpp"
 
 namespace ndc {

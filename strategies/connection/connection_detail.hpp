@@ -8,11 +8,11 @@
 #include <unordered_map>
 #include <vector>
 
-#include "framework/complex.hpp"
-#include "framework/grid.hpp"
-#include "framework/problem.hpp"
-#include "framework/scalar.hpp"
-#include "framework/system.hpp"
+#include "framework/core/complex.hpp"
+#include "framework/core/grid.hpp"
+#include "framework/core/problem.hpp"
+#include "framework/core/scalar.hpp"
+#include "framework/core/system.hpp"
 
 namespace ndc::connection_detail {
 

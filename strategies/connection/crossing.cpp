@@ -13,8 +13,8 @@
 #include <unordered_map>
 #include <vector>
 
-#include "bernstein.hpp"
-#include "interval.hpp"
+#include "framework/core/bernstein.hpp"
+#include "framework/core/interval.hpp"
 #include "strategies/connection/cell_tree.hpp"
 #include "strategies/connection/certificate.hpp"
 

@@ -2,7 +2,7 @@
 /// `crossing`: watertight dual contouring in any dimension (docs/crossing.md; beyond the paper).
 #pragma once
 
-#include "strategy.hpp"
+#include "framework/core/strategy.hpp"
 
 namespace ndc {
 

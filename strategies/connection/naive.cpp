@@ -1,8 +1,8 @@
 // NaiveConnection: the paper's "thick volume" baseline (Sec. 4.1, Fig. 3(b)).
 #include <array>
 
-#include "connection_detail.hpp"
 #include "strategies/connection/connection.hpp"
+#include "strategies/connection/connection_detail.hpp"
 
 namespace ndc {
 

@@ -7,8 +7,8 @@
 #include <utility>
 #include <vector>
 
-#include "connection_detail.hpp"
 #include "strategies/connection/connection.hpp"
+#include "strategies/connection/connection_detail.hpp"
 
 namespace ndc {
 namespace {

@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "framework/problem.hpp"
+#include "framework/core/errors.hpp"
 
 namespace ndc {
 

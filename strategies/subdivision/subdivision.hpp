@@ -19,9 +19,9 @@
 #include <string_view>
 #include <variant>
 
-#include "grid.hpp"
+#include "framework/core/grid.hpp"
+#include "framework/core/strategy.hpp"
 #include "strategies/bounding/bounding.hpp"
-#include "strategy.hpp"
 
 namespace ndc {
 
@@ -72,11 +72,6 @@ Subdivision createSubdivision(std::string_view name);
 template <class S>
 SolutionCells subdivide(const Bounding<S>& bounding, const Subdivision& subdivision,
                         const Grid& grid, const Progress& progress = {}, std::int64_t maxCells = 0);
-
-/// Thrown by subdivide when the solution cells exceed its budget.
-struct CellBudgetExceeded : InputError {
-  using InputError::InputError;
-};
 
 extern template SolutionCells subdivide<double>(const Bounding<double>&, const Subdivision&,
                                                 const Grid&, const Progress&, std::int64_t);

@@ -6,7 +6,7 @@
 /// the dictionary tests/fuzz/fuzz_application.dict. An accepted problem has its equations and
 /// image map evaluated. `InputError` is the expected way to refuse; anything else is a finding.
 /// Run: `scripts/fuzz.sh fuzz_application` (docs/testing.md).
-#include "fuzz_common.hpp"
+#include "tests/fuzz/fuzz_common.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   ndc::fuzz::problemInput(data, size);

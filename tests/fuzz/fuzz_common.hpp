@@ -14,12 +14,13 @@
 #include <string>
 #include <vector>
 
-#include "application.hpp"
-#include "bernstein.hpp"
-#include "expression.hpp"
-#include "interval.hpp"
-#include "problem.hpp"
-#include "scalar.hpp"
+#include "framework/applications/load.hpp"
+#include "framework/core/application.hpp"
+#include "framework/core/bernstein.hpp"
+#include "framework/core/expression.hpp"
+#include "framework/core/interval.hpp"
+#include "framework/core/problem.hpp"
+#include "framework/core/scalar.hpp"
 
 namespace ndc::fuzz {
 

@@ -9,7 +9,7 @@
 #include <array>
 #include <string_view>
 
-#include "fuzz_common.hpp"
+#include "tests/fuzz/fuzz_common.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const std::array<std::string, 3> variables = {"x", "y", "z"};

@@ -1,0 +1,169 @@
+/// \file experiment.hpp
+/// Experiments (docs/experiments.md): a config names problems and lists of strategy settings,
+/// depths and jitter seeds; the runner solves every combination of them (the grid) in child
+/// processes of `ndcontour solve`, resumes where a previous invocation stopped, records every
+/// failure, and collects the summaries in one CSV per experiment with a provenance record.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "framework/core/problem.hpp"
+#include "framework/core/summary.hpp"
+
+namespace ndc {
+
+/// One problem of an experiment: a problem file, or a problem made by a generator
+/// (generate.hpp) that the runner writes out before solving it.
+struct ExperimentProblem {
+  std::string name;            ///< the problem's `name`, unique within the experiment
+  std::string file;            ///< the path recorded in the CSV (`problem_file`)
+  std::filesystem::path path;  ///< where `solve` reads it
+  std::string generatedText;   ///< generated problems: the file text; empty for files
+  int n = 0, k = 0;            ///< dimensions of the problem
+  Expectation expect;          ///< its `[expect]` table
+  std::vector<int> depths;     ///< the depths to run it at
+  /// The jitter seeds to run it with; one empty entry means a single run without jitter.
+  std::vector<std::optional<std::uint64_t>> jitter;
+};
+
+/// A validated experiment config (`experiments/configs/<id>.toml`), in full or quick mode.
+struct ExperimentConfig {
+  std::filesystem::path file;  ///< the config file
+  std::string text;            ///< its text (hashed into the provenance)
+  std::filesystem::path root;  ///< the directory problem paths are relative to
+  std::string id;              ///< equals the file stem; names every result file
+  std::string artefact;        ///< `table` or `figure`
+  std::string description;
+  bool quick = false;  ///< whether the `[quick]` overrides were applied
+  std::vector<ExperimentProblem> problems;
+  /// The strategy lists whose cross product is run, in grid order.
+  std::vector<std::string> bounding, subdivision, projection, classification, connection, scalar;
+  std::vector<unsigned> precision;   ///< MPFR precisions in bits (used with scalar `mpfr`)
+  std::vector<int> depths;           ///< default depths (a problem entry may override them)
+  std::vector<std::uint64_t> seeds;  ///< default jitter seeds; empty: no jitter
+  double timeoutS = 600;             ///< wall-clock limit of one run
+};
+
+/// Reads and validates a config (every key, type, name, range and file; the `[quick]` table
+/// in either mode) and applies the `[quick]` overrides when `quick`. Throws InputError
+/// (`FILE:LINE:COL: message`).
+ExperimentConfig loadExperimentConfig(const std::filesystem::path& file, bool quick);
+
+/// One run of the grid: a problem with settings (strategies, scalar, depth, jitter).
+struct ExperimentRun {
+  std::string id;           ///< the run directory name, stable across invocations
+  std::size_t problem = 0;  ///< index into ExperimentConfig::problems
+  Settings settings;
+};
+
+/// The runs of a config in grid order: problems (as listed, globs sorted, generated problems
+/// by n then seed), then bounding, subdivision, projection, classification, connection,
+/// scalar and precision, depth, and jitter seed.
+std::vector<ExperimentRun> experimentGrid(const ExperimentConfig& config);
+
+/// The leading columns of the combined CSV `<id>.csv`, one row per run.
+/// `expect_ok` and `expect_notes` record the comparison of the run's mesh with the problem's
+/// `[expect]` (checkExpectation, expectation.hpp).
+inline constexpr std::array<std::string_view, 22> kExperimentRunColumns = {
+    "experiment",
+    "run",
+    "problem",
+    "problem_file",
+    "n",
+    "k",
+    "depth",
+    "seed",
+    "scalar",
+    "precision_bits",
+    "bounding",
+    "subdivision",
+    "projection",
+    "classification",
+    "connection",
+    "status",
+    "exit_code",
+    "error",
+    "expect_components",
+    "expect_euler_characteristic",
+    "expect_ok",
+    "expect_notes"};
+
+/// The numeric summary.json fields (docs/contracts.md 4.3, and the counts of 4.5) that follow,
+/// flattened with dotted names. Numeric fields a later summary schema adds come after these, sorted
+/// by name; list elements (singular points, the perturbation level) and `expect` (see `expect_ok`)
+/// are left out.
+inline constexpr std::array<std::string_view, 39> kExperimentSummaryColumns = {
+    "cells.visited",
+    "cells.solution",
+    "cells.normal",
+    "cells.abnormal",
+    "cells.failed",
+    "mesh.vertices",
+    "mesh.edges",
+    "mesh.triangles",
+    "mesh.components",
+    "mesh.boundary_edges",
+    "mesh.nonmanifold_edges",
+    "mesh.euler_characteristic",
+    "mesh.open_ends",
+    "mesh.branch_vertices",
+    "accuracy.max_residual",
+    "accuracy.max_chord_error",
+    "diagnostics.ambiguous_cells",
+    "diagnostics.singular_cells",
+    "diagnostics.chord_failures",
+    "timing_s.subdivision",
+    "timing_s.projection",
+    "timing_s.connection",
+    "timing_s.analysis",
+    "timing_s.total",
+    "diagnostics.off_manifold_vertices",
+    "diagnostics.perturbation.attempts",
+    "diagnostics.perturbation.degenerate_crossings",
+    "mesh.boundary_components",
+    "budget.max_memory_bytes",
+    "budget.estimated_memory_bytes",
+    "budget.timeout_s",
+    "topology.base_level",
+    "topology.certified_cells",
+    "topology.max_depth",
+    "topology.max_level",
+    "topology.reason",
+    "topology.refined_cells",
+    "topology.uncertified_cells",
+    "topology.block_cells"};
+
+/// The numeric fields of a JSON document (numbers and null), in document order, named by
+/// their dotted paths (`cells.visited`); the number text is kept as written, null is "".
+/// Throws std::runtime_error on malformed JSON.
+std::vector<std::pair<std::string, std::string>> flattenJsonNumbers(std::string_view json);
+
+/// Options of one invocation of the runner.
+struct ExperimentOptions {
+  std::filesystem::path outDir = "results";  ///< results go to `<outDir>/<id>/`
+  int jobs = 1;                              ///< runs at once
+  /// The `ndcontour` executable the runs are started with.
+  std::string executable = "/proc/self/exe";
+  /// The command-line spelling of the invocation, recorded in the provenance.
+  std::string commandLine;
+};
+
+/// Runs every unfinished run of the grid (a run is finished when its summary.json exists),
+/// at most `jobs` at once, each limited to `timeoutS`, and writes `<out>/<id>/<id>.csv` and
+/// `provenance.json`. Progress goes to standard error, the final report to standard output.
+/// Returns 0 when every run succeeded, 1 when any failed, 128 + the signal (130, 143) when
+/// interrupted by SIGINT or SIGTERM. Throws
+/// InputError when the output directory cannot be written.
+int runExperiment(ExperimentConfig config, const ExperimentOptions& options);
+
+/// SHA-256 of `text` as 64 lowercase hex digits (the config hash of the provenance).
+std::string sha256Hex(std::string_view text);
+
+}  // namespace ndc

@@ -1,0 +1,297 @@
+// The analysis stage (docs/contracts.md 4.3): welding, topology and accuracy of a complex.
+//
+// Welding: vertices closer than `tolerance` (Euclidean, in the coordinates) merge into the
+// first of them (its coordinates are kept, not averaged, so a welded vertex is still a
+// projected point of M). Candidates are found in a hashed grid of buckets of edge
+// 16 * tolerance: a vertex looks in its own bucket and, along each axis where it lies within
+// 2 * tolerance of a bucket face, in the neighbour bucket across that face (so pairs that
+// straddle a face merge too, at an expected ~1.25^n buckets per vertex instead of 3^n).
+// Merging is greedy in vertex order: a chain a~b~c with |a - c| > tolerance still maps every
+// vertex to the first representative within tolerance.
+//
+// Chord error: a midpoint / centroid whose projection does not converge is left out of
+// max_chord_error and counted in MeshStats::chordFailures.
+#include "framework/core/analysis.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <numeric>
+#include <span>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+namespace ndc {
+
+namespace {
+
+std::uint64_t mix(std::uint64_t h, std::uint64_t v) {
+  // splitmix64 finaliser of the running hash and the next value.
+  h ^= v + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
+  h ^= h >> 30;
+  h *= 0xbf58476d1ce4e5b9ULL;
+  h ^= h >> 27;
+  h *= 0x94d049bb133111ebULL;
+  return h ^ (h >> 31);
+}
+
+struct VectorHash {
+  std::size_t operator()(const std::vector<std::int32_t>& v) const {
+    std::uint64_t h = v.size();
+    for (std::int32_t x : v) h = mix(h, static_cast<std::uint32_t>(x));
+    return static_cast<std::size_t>(h);
+  }
+};
+
+std::uint64_t edgeKey(std::int32_t a, std::int32_t b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
+         static_cast<std::uint32_t>(b);
+}
+
+/// Union-find over vertex numbers, for the connected components.
+class DisjointSets {
+ public:
+  explicit DisjointSets(std::size_t n) : parent_(n) {
+    std::iota(parent_.begin(), parent_.end(), std::int32_t{0});
+  }
+  std::int32_t find(std::int32_t v) {
+    while (parent_[v] != v) v = parent_[v] = parent_[parent_[v]];
+    return v;
+  }
+  void unite(std::int32_t a, std::int32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
+  }
+
+ private:
+  std::vector<std::int32_t> parent_;
+};
+
+/// Every (d+1)-vertex subset of a simplex, sorted, appended to `faces` (d + 1 ints each).
+void subsets(std::span<const std::int32_t> simplex, int size, std::vector<std::int32_t>& chosen,
+             int start, std::vector<std::vector<std::int32_t>>& faces) {
+  if (static_cast<int>(chosen.size()) == size) {
+    faces.push_back(chosen);
+    std::sort(faces.back().begin(), faces.back().end());
+    return;
+  }
+  for (int i = start; i < static_cast<int>(simplex.size()); ++i) {
+    chosen.push_back(simplex[i]);
+    subsets(simplex, size, chosen, i + 1, faces);
+    chosen.pop_back();
+  }
+}
+
+}  // namespace
+
+template <class S>
+Complex<S> weld(const Complex<S>& complex, double tolerance) {
+  const int n = complex.n;
+  const int k = complex.k;
+  Complex<S> out;
+  out.n = n;
+  out.k = k;
+  const bool fuzzy = tolerance > 0;
+  const double bucket = fuzzy ? 16 * tolerance : 1.0;
+  const double margin = 2 * tolerance;
+  const S tol2 = fuzzy ? S(tolerance) * S(tolerance) : S(0);
+
+  // Step 1: greedy merge through the hashed bucket grid.
+  std::unordered_map<std::uint64_t, std::vector<std::int32_t>> buckets;
+  std::vector<std::int32_t> remap(complex.vertexCount());
+  std::vector<std::int64_t> home(n), probe(n);
+  std::vector<std::array<int, 2>> reach(n);  // per axis: lowest and highest bucket offset
+  std::vector<int> offset(n);
+  const auto hashOf = [&](std::span<const std::int64_t> b) {
+    std::uint64_t h = 0x12345678;
+    for (std::int64_t c : b) h = mix(h, static_cast<std::uint64_t>(c));
+    return h;
+  };
+  for (std::size_t v = 0; v < complex.vertexCount(); ++v) {
+    const auto x = complex.vertex(v);
+    for (int j = 0; j < n; ++j) {
+      const double xd = toDouble(x[j]);
+      double q = std::floor(xd / bucket);
+      if (!std::isfinite(q)) q = 0;  // NaN / inf coordinates share bucket 0; distance decides
+      q = std::clamp(q, -4.0e18, 4.0e18);
+      home[j] = static_cast<std::int64_t>(q);
+      reach[j] = {0, 0};
+      if (fuzzy && std::isfinite(xd)) {
+        // Why: a partner within tolerance may sit across the nearest bucket face.
+        if (xd - q * bucket <= margin) reach[j][0] = -1;
+        if ((q + 1) * bucket - xd <= margin) reach[j][1] = 1;
+      }
+    }
+    // Look in every bucket of the product of the per-axis offsets.
+    std::int32_t found = -1;
+    for (int j = 0; j < n; ++j) offset[j] = reach[j][0];
+    while (found < 0) {
+      for (int j = 0; j < n; ++j) probe[j] = home[j] + offset[j];
+      auto it = buckets.find(hashOf(probe));
+      if (it != buckets.end()) {
+        for (std::int32_t r : it->second) {
+          const auto y = out.vertex(r);
+          S d2 = 0;
+          for (int j = 0; j < n; ++j) d2 += (x[j] - y[j]) * (x[j] - y[j]);
+          if (d2 <= tol2 && (found < 0 || r < found)) found = r;
+        }
+      }
+      int j = 0;
+      while (j < n && offset[j] == reach[j][1]) offset[j] = reach[j][0], ++j;
+      if (j == n) break;
+      ++offset[j];
+    }
+    if (found < 0) {
+      found = out.addVertex(x, complex.vertexCell.empty() ? -1 : complex.vertexCell[v]);
+      buckets[hashOf(home)].push_back(found);
+    }
+    remap[v] = found;
+  }
+
+  // Step 2: remap the simplices, drop degenerate ones and duplicates (same vertex set).
+  std::unordered_set<std::vector<std::int32_t>, VectorHash> seen;
+  std::vector<std::int32_t> simplex(k + 1), sorted(k + 1);
+  for (std::size_t s = 0; s < complex.simplexCount(); ++s) {
+    for (int i = 0; i <= k; ++i) simplex[i] = remap[complex.simplices[s * (k + 1) + i]];
+    sorted = simplex;
+    std::sort(sorted.begin(), sorted.end());
+    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) continue;
+    if (!seen.insert(sorted).second) continue;
+    out.addSimplex(simplex);
+  }
+  return out;
+}
+
+template <class S>
+MeshStats analyse(const Complex<S>& welded, const System<S>& system, const Projector<S>& project) {
+  using std::abs;
+  using std::sqrt;
+  const int n = welded.n;
+  const int k = welded.k;
+  const std::size_t vertexCount = welded.vertexCount();
+  const std::size_t simplexCount = welded.simplexCount();
+  MeshStats stats;
+  stats.vertices = static_cast<std::int64_t>(vertexCount);
+  const auto simplexAt = [&](std::size_t s) {
+    return std::span<const std::int32_t>(welded.simplices.data() + s * (k + 1),
+                                         static_cast<std::size_t>(k + 1));
+  };
+
+  // Distinct edges with the number of simplices on each; components from the edge graph.
+  std::unordered_map<std::uint64_t, std::int32_t> edges;
+  DisjointSets sets(vertexCount);
+  for (std::size_t s = 0; s < simplexCount; ++s) {
+    const auto v = simplexAt(s);
+    for (int a = 0; a <= k; ++a) {
+      for (int b = a + 1; b <= k; ++b) {
+        ++edges[edgeKey(v[a], v[b])];
+        sets.unite(v[a], v[b]);
+      }
+    }
+  }
+  stats.edges = static_cast<std::int64_t>(edges.size());
+  for (std::size_t v = 0; v < vertexCount; ++v) {
+    if (sets.find(static_cast<std::int32_t>(v)) == static_cast<std::int32_t>(v)) {
+      ++stats.components;  // isolated vertices are components too
+    }
+  }
+
+  if (k == 1) {
+    // Polylines: open ends (degree 1) and branch vertices (degree >= 3).
+    std::vector<std::int32_t> degree(vertexCount, 0);
+    for (const auto& [key, count] : edges) {
+      ++degree[key >> 32];
+      ++degree[key & 0xffffffffULL];
+    }
+    for (std::int32_t d : degree) {
+      if (d == 1) ++stats.openEnds;
+      if (d >= 3) ++stats.branchVertices;
+    }
+    stats.eulerCharacteristic = stats.vertices - stats.edges;
+  } else if (k == 2) {
+    // Triangle meshes: an edge of one triangle is boundary, of three or more non-manifold.
+    stats.triangles = static_cast<std::int64_t>(simplexCount);
+    DisjointSets boundary(vertexCount);
+    std::vector<std::uint8_t> onBoundary(vertexCount, 0);
+    for (const auto& [key, count] : edges) {
+      if (count == 1) {
+        ++stats.boundaryEdges;
+        const auto a = static_cast<std::int32_t>(key >> 32);
+        const auto b = static_cast<std::int32_t>(key & 0xffffffffULL);
+        boundary.unite(a, b);
+        onBoundary[a] = onBoundary[b] = 1;
+      }
+      if (count >= 3) ++stats.nonmanifoldEdges;
+    }
+    for (std::size_t v = 0; v < vertexCount; ++v) {
+      const auto i = static_cast<std::int32_t>(v);
+      if (onBoundary[v] && boundary.find(i) == i) ++stats.boundaryComponents;
+    }
+    stats.eulerCharacteristic = stats.vertices - stats.edges + stats.triangles;
+  } else if (k >= 3) {
+    // Beyond docs/contracts.md 4.3: triangles are the distinct 2-faces, boundary / non-manifold
+    // count the (k-1)-faces of one / three or more simplices, and chi is the full alternating sum.
+    std::int64_t chi = stats.vertices - stats.edges;
+    std::vector<std::int32_t> chosen;
+    for (int d = 2; d <= k; ++d) {
+      std::unordered_map<std::vector<std::int32_t>, std::int32_t, VectorHash> faces;
+      std::vector<std::vector<std::int32_t>> list;
+      for (std::size_t s = 0; s < simplexCount; ++s) {
+        list.clear();
+        subsets(simplexAt(s), d + 1, chosen, 0, list);
+        for (auto& f : list) ++faces[std::move(f)];
+      }
+      const auto count = static_cast<std::int64_t>(faces.size());
+      chi += (d % 2 == 0 ? count : -count);
+      if (d == 2) stats.triangles = count;
+      if (d == k - 1) {
+        for (const auto& [face, c] : faces) {
+          if (c == 1) ++stats.boundaryEdges;
+          if (c >= 3) ++stats.nonmanifoldEdges;
+        }
+      }
+    }
+    stats.eulerCharacteristic = chi;
+  }
+
+  // Accuracy: the residual at the vertices, in S.
+  S worstResidual = 0;
+  for (std::size_t v = 0; v < vertexCount; ++v) {
+    worstResidual = std::max<S>(worstResidual, system.maxResidual(welded.vertex(v)));
+  }
+  stats.maxResidual = toDouble(worstResidual);
+
+  // Chord error: distance of each simplex's barycentre to its Newton projection onto M.
+  S worstChord = 0;
+  std::vector<S> centre(n), projected(n);
+  for (std::size_t s = 0; s < simplexCount; ++s) {
+    const auto v = simplexAt(s);
+    std::fill(centre.begin(), centre.end(), S(0));
+    for (std::int32_t i : v) {
+      const auto x = welded.vertex(i);
+      for (int j = 0; j < n; ++j) centre[j] += x[j];
+    }
+    for (int j = 0; j < n; ++j) centre[j] /= S(k + 1);
+    projected = centre;
+    if (!project || !project(projected).converged) {
+      ++stats.chordFailures;
+      continue;
+    }
+    S d2 = 0;
+    for (int j = 0; j < n; ++j) d2 += (projected[j] - centre[j]) * (projected[j] - centre[j]);
+    worstChord = std::max<S>(worstChord, sqrt(d2));
+  }
+  stats.maxChordError = toDouble(worstChord);
+  return stats;
+}
+
+template Complex<double> weld(const Complex<double>&, double);
+template Complex<Mpfr> weld(const Complex<Mpfr>&, double);
+template MeshStats analyse(const Complex<double>&, const System<double>&, const Projector<double>&);
+template MeshStats analyse(const Complex<Mpfr>&, const System<Mpfr>&, const Projector<Mpfr>&);
+
+}  // namespace ndc

@@ -1,0 +1,72 @@
+/// \file grid.hpp
+/// The uniform grid of the subdivision's final depth: 2^L cells per axis, cells named by
+/// integer multi-indices and kept in a hash map keyed by the packed index (docs/algorithm1.md).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <unordered_map>
+#include <vector>
+
+#include "framework/core/box.hpp"
+
+namespace ndc {
+
+/// Packed multi-index of a grid cell: L bits per axis, axis 0 lowest. Requires n * L <= 64.
+using CellKey = std::uint64_t;
+
+/// The uniform grid of `2^L` cells per axis on a box domain.
+struct Grid {
+  int n = 0;           ///< ambient dimension
+  int depth = 0;       ///< L
+  Box<double> domain;  ///< the problem domain (jitter, if any, is already applied)
+
+  /// Cells per axis, 2^L.
+  std::int64_t cellsPerAxis() const { return std::int64_t{1} << depth; }
+  /// Whether n * L fits a CellKey.
+  static bool fits(int n, int depth) { return n * depth <= 64 && depth <= 30; }
+  CellKey pack(std::span<const std::int32_t> index) const;
+  void unpack(CellKey key, std::span<std::int32_t> index) const;
+  /// The key of the face neighbour `index + sign e_axis` (caller checks the bounds).
+  CellKey neighbour(CellKey key, int axis, int sign) const;
+  /// Lower corner and width of a cell along an axis, in double.
+  double cellLower(int axis, std::int32_t i) const;
+  double cellWidth(int axis) const;
+};
+
+/// The closed box of the cell with multi-index `index` in scalar S, on `domain` (the grid's
+/// domain in S): `lo_j + (hi_j - lo_j) i_j / 2^L`.
+template <class S>
+Box<S> cellBox(const Grid& grid, const Box<S>& domain, std::span<const std::int32_t> index) {
+  Box<S> box{std::vector<S>(grid.n), std::vector<S>(grid.n)};
+  const S cells = S(static_cast<double>(grid.cellsPerAxis()));
+  for (int j = 0; j < grid.n; ++j) {
+    const S w = (domain.hi[j] - domain.lo[j]) / cells;
+    box.lo[j] = domain.lo[j] + w * S(static_cast<double>(index[j]));
+    // The same formula for both ends, so neighbouring cells share their face exactly.
+    box.hi[j] = index[j] + 1 == grid.cellsPerAxis()
+                    ? domain.hi[j]
+                    : domain.lo[j] + w * S(static_cast<double>(index[j] + 1));
+  }
+  return box;
+}
+
+/// The solution cells: final-depth boxes the subdivision could not discard.
+struct SolutionCells {
+  Grid grid;
+  std::int64_t visited = 0;                          ///< boxes the subdivision bounded
+  std::vector<std::int32_t> index;                   ///< n ints per cell, cell c at [c n, (c+1) n)
+  std::unordered_map<CellKey, std::int32_t> lookup;  ///< packed index -> cell number
+
+  std::size_t size() const { return grid.n ? index.size() / grid.n : 0; }
+  std::span<const std::int32_t> cell(std::size_t c) const {
+    return {index.data() + c * grid.n, static_cast<std::size_t>(grid.n)};
+  }
+  /// Cell number of the face neighbour of cell c across `axis` in direction `sign` (+1/-1),
+  /// or -1 when that neighbour is not a solution cell or lies outside the grid.
+  std::int32_t neighbour(std::size_t c, int axis, int sign) const;
+  /// Appends a cell (its key must be new).
+  void add(std::span<const std::int32_t> cellIndex);
+};
+
+}  // namespace ndc

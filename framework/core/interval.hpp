@@ -1,0 +1,74 @@
+/// \file interval.hpp
+/// Outward-rounded interval arithmetic: Boost.Interval on double, MPFI on Mpfr.
+#pragma once
+
+#include <string_view>
+
+#include "framework/core/scalar.hpp"
+
+namespace ndc {
+
+/// A closed interval `[lower, upper]` of scalars `S`, with outward rounding, so every result
+/// encloses the exact result of the operation on any points of the operands.
+///
+/// Models: `Interval<double>` (Boost.Interval with rounded arithmetic) and `Interval<Mpfr>`
+/// (MPFI at the current Mpfr precision). Both are defined in interval.cpp; this header does not
+/// pull in either library.
+template <class S>
+class Interval {
+ public:
+  Interval();                                ///< [0, 0]
+  explicit Interval(const S& point);         ///< [p, p]
+  Interval(const S& lower, const S& upper);  ///< requires lower <= upper
+  /// The tightest enclosure of a decimal literal (e.g. "0.1" is not a double).
+  static Interval fromString(std::string_view text);
+  Interval(const Interval&);
+  Interval(Interval&&) noexcept;
+  Interval& operator=(const Interval&);
+  Interval& operator=(Interval&&) noexcept;
+  ~Interval();
+
+  S lower() const;
+  S upper() const;
+  /// Rounded midpoint (inside the interval).
+  S midpoint() const;
+  /// Width rounded up.
+  S width() const;
+  bool contains(const S& v) const;
+  bool containsZero() const;
+
+  Interval& operator+=(const Interval& o);
+  Interval& operator-=(const Interval& o);
+  Interval& operator*=(const Interval& o);
+  Interval operator-() const;
+  /// Integer power `x^n`, n >= 0, with the even-power rule (`[-1,2]^2 = [0,4]`).
+  Interval pow(int exponent) const;
+  /// Division by a point scalar != 0.
+  Interval dividedBy(const S& divisor) const;
+  /// Smallest interval holding both.
+  Interval hull(const Interval& o) const;
+
+ private:
+  struct Impl;
+  alignas(16) unsigned char storage_[64];  // holds the backend value without a heap object
+  Impl& impl();
+  const Impl& impl() const;
+};
+
+template <class S>
+Interval<S> operator+(Interval<S> a, const Interval<S>& b) {
+  return a += b;
+}
+template <class S>
+Interval<S> operator-(Interval<S> a, const Interval<S>& b) {
+  return a -= b;
+}
+template <class S>
+Interval<S> operator*(Interval<S> a, const Interval<S>& b) {
+  return a *= b;
+}
+
+extern template class Interval<double>;
+extern template class Interval<Mpfr>;
+
+}  // namespace ndc

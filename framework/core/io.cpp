@@ -1,0 +1,464 @@
+#include "framework/core/io.hpp"
+
+#include "framework/core/application.hpp"
+
+#include <signal.h>
+#include <sys/time.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "framework/core/problem.hpp"
+
+namespace ndc {
+namespace {
+
+std::string number(double v) {
+  if (!std::isfinite(v)) return "null";  // JSON has no inf/nan
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.17g", v);
+  return buffer;
+}
+
+/// Paths an interrupt must remove: the staging folder of writeOutputs and its files, kept as
+/// plain character arrays so that the signal handler only calls unlink, rmdir and _exit.
+struct InterruptCleanup {
+  static constexpr std::size_t kPaths = 8, kLength = 4096;
+  std::array<std::array<char, kLength>, kPaths> files{};
+  std::array<char, kLength> folder{};
+  volatile sig_atomic_t count = 0;
+  /// The line armTimeout's alarm prints, its exit status, and whether the outputs are already
+  /// published (an alarm held back by the publication then has nothing left to stop).
+  std::array<char, kLength> timeoutLine{};
+  volatile sig_atomic_t timeoutStatus = 0;
+  volatile sig_atomic_t published = 0;
+};
+InterruptCleanup cleanup;
+
+void copyPath(std::array<char, InterruptCleanup::kLength>& to, const std::filesystem::path& p) {
+  const std::string s = p.string();
+  const std::size_t n = std::min(s.size(), to.size() - 1);
+  std::memcpy(to.data(), s.data(), n);
+  to[n] = '\0';
+}
+
+/// Removes the staging folder (only async-signal-safe calls).
+void removeStaging() {
+  for (sig_atomic_t i = 0; i < cleanup.count; ++i) ::unlink(cleanup.files[i].data());
+  if (cleanup.folder[0] != '\0') ::rmdir(cleanup.folder.data());
+}
+
+extern "C" void onInterrupt(int signal) {
+  removeStaging();
+  ::_exit(128 + signal);
+}
+
+extern "C" void onTimeout(int) {
+  if (cleanup.published) return;
+  removeStaging();
+  const char* line = cleanup.timeoutLine.data();
+  std::size_t length = 0;
+  while (line[length] != '\0') ++length;
+  [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, line, length);
+  ::_exit(cleanup.timeoutStatus);
+}
+
+/// Blocks SIGINT, SIGTERM and armTimeout's SIGALRM for its lifetime (the few renames that
+/// publish a run).
+class BlockInterrupts {
+ public:
+  BlockInterrupts() {
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, SIGINT);
+    sigaddset(&set, SIGTERM);
+    sigaddset(&set, SIGALRM);
+    ::sigprocmask(SIG_BLOCK, &set, &saved_);
+  }
+  ~BlockInterrupts() { ::sigprocmask(SIG_SETMASK, &saved_, nullptr); }
+  BlockInterrupts(const BlockInterrupts&) = delete;
+  BlockInterrupts& operator=(const BlockInterrupts&) = delete;
+
+ private:
+  sigset_t saved_;
+};
+
+std::string numberList(const std::vector<double>& values) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + number(values[i]);
+  return out + "]";
+}
+
+}  // namespace
+
+std::string jsonQuoted(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buffer[8];
+      std::snprintf(buffer, sizeof buffer, "\\u%04x", c);
+      out += buffer;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+void writeAtomically(const std::filesystem::path& target, const std::string& text) {
+  const auto temporary = target.parent_path() /
+                         ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()));
+  {
+    std::ofstream out(temporary, std::ios::binary);
+    out << text;
+    out.flush();
+    if (!out) {
+      std::error_code ignored;
+      std::filesystem::remove(temporary, ignored);
+      throw InputError(target.string() + ": cannot write the file");
+    }
+  }
+  std::error_code error;
+  std::filesystem::rename(temporary, target, error);
+  if (error) throw InputError(target.string() + ": cannot write the file: " + error.message());
+}
+
+std::string toJson(const Summary& s) {
+  std::ostringstream o;
+  const Settings& t = s.settings;
+  o << "{\n  \"schema\": \"ndcontour.summary/1\",\n  \"problem\": " << jsonQuoted(s.problem)
+    << ",\n  \"n\": " << s.n << ",\n  \"k\": " << s.k << ",\n";
+  o << "  \"settings\": {\"depth\": " << t.depth << ", \"bounding\": " << jsonQuoted(t.bounding)
+    << ", \"subdivision\": " << jsonQuoted(t.subdivision)
+    << ", \"scalar\": " << jsonQuoted(t.scalar) << ", \"precision_bits\": " << t.precisionBits
+    << ", \"projection\": " << jsonQuoted(t.projection)
+    << ", \"classification\": " << jsonQuoted(t.classification)
+    << ", \"connection\": " << jsonQuoted(t.connection)
+    << ", \"jitter\": " << (t.jitter ? std::to_string(*t.jitter) : "null")
+    << ", \"max_depth\": " << s.topology.maxDepth
+    << ", \"tolerance\": " << (t.tolerance > 0 ? number(t.tolerance) : std::string("null"))
+    << "},\n";
+  o << "  \"cells\": {\"visited\": " << s.visited << ", \"solution\": " << s.solution
+    << ", \"normal\": " << s.normal << ", \"abnormal\": " << s.abnormal
+    << ", \"failed\": " << s.failed << "},\n";
+  const MeshStats& m = s.mesh;
+  o << "  \"mesh\": {\"vertices\": " << m.vertices << ", \"edges\": " << m.edges
+    << ", \"triangles\": " << m.triangles << ", \"components\": " << m.components
+    << ", \"boundary_edges\": " << m.boundaryEdges
+    << ", \"boundary_components\": " << m.boundaryComponents
+    << ", \"nonmanifold_edges\": " << m.nonmanifoldEdges
+    << ", \"euler_characteristic\": " << m.eulerCharacteristic << ", \"open_ends\": " << m.openEnds
+    << ", \"branch_vertices\": " << m.branchVertices << "},\n";
+  o << "  \"accuracy\": {\"max_residual\": " << number(m.maxResidual)
+    << ", \"max_chord_error\": " << number(m.maxChordError) << "},\n";
+  o << "  \"diagnostics\": {\"ambiguous_cells\": " << s.ambiguousCells
+    << ", \"singular_cells\": " << s.singularCells << ", \"chord_failures\": " << m.chordFailures
+    << ", \"off_manifold_vertices\": " << s.offManifoldVertices;
+  // Extensions (docs/contracts.md 4.5): located singular points and the crossing's perturbation.
+  o << ",\n    \"singular_points\": [";
+  for (std::size_t i = 0; i < s.singularPoints.size(); ++i) {
+    const SingularPoint& p = s.singularPoints[i];
+    o << (i ? ",\n      " : "\n      ") << "{\"point\": " << numberList(p.point)
+      << ", \"sigma_min\": " << number(p.sigmaMin) << "}";
+  }
+  o << (s.singularPoints.empty() ? "]" : "\n    ]");
+  const PerturbationRecord& q = s.perturbation;
+  o << ",\n    \"perturbation\": {\"level\": " << numberList(q.level)
+    << ", \"attempts\": " << q.attempts << ", \"degenerate_crossings\": " << q.degenerateCrossings
+    << "}},\n";
+  // Extension: the topology certificate and the adaptive refinement (docs/certificate.md).
+  const TopologyRecord& g = s.topology;
+  o << "  \"topology\": {\"certified\": " << (g.certified ? "true" : "false")
+    << ", \"reason\": " << (g.reason.empty() ? "null" : jsonQuoted(g.reason))
+    << ", \"certified_cells\": " << g.certifiedCells << ", \"refined_cells\": " << g.refinedCells
+    << ", \"uncertified_cells\": " << g.uncertifiedCells << ", \"block_cells\": " << g.blockCells
+    << ", \"base_level\": " << g.baseLevel << ", \"max_level\": " << g.maxLevel
+    << ", \"max_depth\": " << g.maxDepth << "},\n";
+  o << "  \"timing_s\": {\"subdivision\": " << number(s.tSubdivision)
+    << ", \"projection\": " << number(s.tProjection)
+    << ", \"connection\": " << number(s.tConnection) << ", \"analysis\": " << number(s.tAnalysis)
+    << ", \"total\": " << number(s.tTotal) << "}";
+  // Extension: the run's budgets (docs/input-limits.md) and the memory it was estimated to need.
+  o << ",\n  \"budget\": {\"max_memory_bytes\": " << number(s.memoryBudget)
+    << ", \"estimated_memory_bytes\": " << number(s.estimatedMemory)
+    << ", \"timeout_s\": " << (t.timeoutSeconds ? number(*t.timeoutSeconds) : "null") << "}";
+  // Extension (docs/contracts.md 4.5): the problem's [expect] compared with the mesh, when it has
+  // one.
+  if (!s.expect.empty()) {
+    o << ",\n  \"expect\": {";
+    for (std::size_t i = 0; i < s.expect.size(); ++i) {
+      const ExpectCheck& c = s.expect[i];
+      o << (i ? ", " : "") << jsonQuoted(c.key) << ": {\"wanted\": " << c.wanted;
+      if (c.notComparable.empty())
+        o << ", \"got\": " << c.got << ", \"ok\": " << (c.ok ? "true" : "false") << "}";
+      else
+        o << ", \"got\": null, \"ok\": null, \"not_comparable\": " << jsonQuoted(c.notComparable)
+          << "}";
+    }
+    o << "}";
+  }
+  // Extension (application problems): which application, and where its image map is singular.
+  if (!s.application.empty())
+    o << ",\n  \"application\": {\"name\": " << jsonQuoted(s.application)
+      << ", \"image_singular_vertices\": " << s.imageSingularVertices
+      << ", \"singular_meaning\": " << jsonQuoted(s.singularName) << "}";
+  o << "\n}\n";
+  return o.str();
+}
+
+void writePly(std::ostream& out, const RunResult& r) {
+  const std::size_t vertexCount = r.n ? r.vertices.size() / r.n : 0;
+  const std::size_t simplexCount = r.simplices.size() / (r.k + 1);
+  const ApplicationData* app = r.application.get();
+  const bool second = app && app->secondImage;
+  out << "ply\nformat ascii 1.0\ncomment ndcontour " << NDC_VERSION << " problem "
+      << r.summary.problem << "\n";
+  if (app)
+    out << "comment application " << app->name
+        << ": x y z is the image in R^3, u0.. the surface parameters\n";
+  out << "element vertex " << vertexCount << "\n";
+  out << "property double x\nproperty double y\nproperty double z\n";
+  for (int j = 0; j < r.n; ++j) out << "property double u" << j << "\n";
+  if (second) out << "property double x2\nproperty double y2\nproperty double z2\n";
+  if (r.k == 1) {
+    out << "element edge " << simplexCount << "\nproperty int vertex1\nproperty int vertex2\n";
+  } else {
+    out << "element face " << simplexCount << "\nproperty list uchar int vertex_indices\n";
+  }
+  out << "end_header\n";
+  for (std::size_t v = 0; v < vertexCount; ++v) {
+    const double* p = r.vertices.data() + v * r.n;
+    const std::span<const double> x(p, static_cast<std::size_t>(r.n));
+    if (app) {
+      // The application's map to R^3, and the surface parameters of B-spline variables.
+      for (double c : app->image(x)) out << number(c) << ' ';
+      for (int j = 0; j < r.n; ++j)
+        out << number(app->parameter(j, p[j])) << (j + 1 < r.n || second ? ' ' : '\n');
+      if (second) {
+        const auto y = (*app->secondImage)(x);
+        out << number(y[0]) << ' ' << number(y[1]) << ' ' << number(y[2]) << '\n';
+      }
+      continue;
+    }
+    // The 3-D image: the first three coordinates, zero-padded.
+    for (int j = 0; j < 3; ++j) out << number(j < r.n ? p[j] : 0.0) << ' ';
+    for (int j = 0; j < r.n; ++j) out << number(p[j]) << (j + 1 < r.n ? ' ' : '\n');
+  }
+  for (std::size_t s = 0; s < simplexCount; ++s) {
+    const std::int32_t* v = r.simplices.data() + s * (r.k + 1);
+    if (r.k == 1) {
+      out << v[0] << ' ' << v[1] << '\n';
+    } else {
+      out << r.k + 1;
+      for (int i = 0; i <= r.k; ++i) out << ' ' << v[i];
+      out << '\n';
+    }
+  }
+}
+
+void writeCellsCsv(std::ostream& out, const RunResult& r) {
+  out << "cell";
+  for (int j = 0; j < r.n; ++j) out << ",i" << j;
+  for (int j = 0; j < r.n; ++j) out << ",c" << j;
+  out << ",class";
+  for (int j = 0; j < r.n; ++j) out << ",p" << j;
+  out << '\n';
+  for (std::size_t c = 0; c < r.cellClass.size(); ++c) {
+    out << c;
+    for (int j = 0; j < r.n; ++j) out << ',' << r.cellIndex[c * r.n + j];
+    for (int j = 0; j < r.n; ++j) out << ',' << number(r.cellCentre[c * r.n + j]);
+    out << ',' << className(r.cellClass[c]);
+    for (int j = 0; j < r.n; ++j) out << ',' << number(r.cellPoint[c * r.n + j]);
+    out << '\n';
+  }
+}
+
+void writeSingularCsv(std::ostream& out, const RunResult& r) {
+  out << "point,sigma_min";
+  for (int j = 0; j < r.n; ++j) out << ",u" << j;
+  out << '\n';
+  for (std::size_t i = 0; i < r.summary.singularPoints.size(); ++i) {
+    const SingularPoint& p = r.summary.singularPoints[i];
+    out << i << ',' << number(p.sigmaMin);
+    for (int j = 0; j < r.n; ++j)
+      out << ',' << (static_cast<std::size_t>(j) < p.point.size() ? number(p.point[j]) : "");
+    out << '\n';
+  }
+}
+
+void writeUncertifiedCsv(std::ostream& out, const RunResult& r) {
+  out << "kind,level,reason";
+  for (int j = 0; j < r.n; ++j) out << ",lo" << j << ",hi" << j;
+  out << '\n';
+  for (const UncertifiedCell& c : r.summary.topology.uncertified) {
+    out << "cell," << c.level << ',' << c.reason;
+    for (int j = 0; j < r.n; ++j) out << ',' << number(c.lo[j]) << ',' << number(c.hi[j]);
+    out << '\n';
+  }
+  for (const SingularPoint& p : r.summary.singularPoints) {
+    out << "singular_point,,sigma_min=" << number(p.sigmaMin);
+    for (int j = 0; j < r.n; ++j) {
+      const std::string v = static_cast<std::size_t>(j) < p.point.size() ? number(p.point[j]) : "";
+      out << ',' << v << ',' << v;
+    }
+    out << '\n';
+  }
+}
+
+void writeInputPly(std::ostream& out, const TriangleSoup& input) {
+  out << "ply\nformat ascii 1.0\ncomment ndcontour input surfaces\nelement vertex "
+      << input.vertices.size() << "\nproperty double x\nproperty double y\nproperty double z\n"
+      << "element face " << input.triangles.size()
+      << "\nproperty list uchar int vertex_indices\nproperty int part\nend_header\n";
+  for (const auto& v : input.vertices)
+    out << number(v[0]) << ' ' << number(v[1]) << ' ' << number(v[2]) << '\n';
+  for (std::size_t t = 0; t < input.triangles.size(); ++t)
+    out << "3 " << input.triangles[t][0] << ' ' << input.triangles[t][1] << ' '
+        << input.triangles[t][2] << ' ' << input.part[t] << '\n';
+}
+
+void writeRuledPly(std::ostream& out, const RunResult& r) {
+  // Each polyline edge (a, b) sweeps the quad S1(a) S2(a) S2(b) S1(b) of bitangent segments.
+  const ApplicationData& app = *r.application;
+  const std::size_t vertexCount = r.n ? r.vertices.size() / r.n : 0;
+  const std::size_t edgeCount = r.simplices.size() / 2;
+  out << "ply\nformat ascii 1.0\ncomment ndcontour ruled surface of bitangent segments\n"
+      << "element vertex " << 2 * vertexCount
+      << "\nproperty double x\nproperty double y\nproperty double z\nelement face " << 2 * edgeCount
+      << "\nproperty list uchar int vertex_indices\nend_header\n";
+  for (int which = 0; which < 2; ++which)
+    for (std::size_t v = 0; v < vertexCount; ++v) {
+      const std::span<const double> x(r.vertices.data() + v * r.n, static_cast<std::size_t>(r.n));
+      const auto y = which == 0 ? app.image(x) : (*app.secondImage)(x);
+      out << number(y[0]) << ' ' << number(y[1]) << ' ' << number(y[2]) << '\n';
+    }
+  for (std::size_t e = 0; e < edgeCount; ++e) {
+    const std::int64_t a = r.simplices[2 * e], b = r.simplices[2 * e + 1];
+    const std::int64_t a2 = a + static_cast<std::int64_t>(vertexCount),
+                       b2 = b + static_cast<std::int64_t>(vertexCount);
+    out << "3 " << a << ' ' << a2 << ' ' << b2 << "\n3 " << a << ' ' << b2 << ' ' << b << '\n';
+  }
+}
+
+void installInterruptCleanup() {
+  struct sigaction action {};
+  action.sa_handler = onInterrupt;
+  sigemptyset(&action.sa_mask);
+  ::sigaction(SIGINT, &action, nullptr);
+  ::sigaction(SIGTERM, &action, nullptr);
+}
+
+void armTimeout(double seconds, const std::string& line, int status) {
+  copyPath(cleanup.timeoutLine, line + "\n");
+  cleanup.timeoutStatus = status;
+  cleanup.published = 0;
+  struct sigaction action {};
+  action.sa_handler = onTimeout;
+  sigemptyset(&action.sa_mask);
+  ::sigaction(SIGALRM, &action, nullptr);
+  itimerval timer{};
+  const double whole = std::floor(seconds);
+  timer.it_value.tv_sec = static_cast<time_t>(whole);
+  timer.it_value.tv_usec = static_cast<suseconds_t>((seconds - whole) * 1e6);
+  if (timer.it_value.tv_sec == 0 && timer.it_value.tv_usec == 0) timer.it_value.tv_usec = 1;
+  ::setitimer(ITIMER_REAL, &timer, nullptr);
+}
+
+void disarmTimeout() {
+  cleanup.published = 1;
+  itimerval none{};
+  ::setitimer(ITIMER_REAL, &none, nullptr);
+}
+
+std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const RunResult& result) {
+  std::error_code error;
+  std::filesystem::create_directories(dir, error);
+  if (error || !std::filesystem::is_directory(dir)) {
+    throw InputError(dir.string() + ": cannot create the output directory");
+  }
+  // Every file is formatted before the first one is written.
+  std::vector<std::pair<std::string, std::string>> files;
+  const auto add = [&](const char* name, auto write) {
+    std::ostringstream text;
+    write(text);
+    files.emplace_back(name, text.str());
+  };
+  add("mesh.ply", [&](std::ostream& o) { writePly(o, result); });
+  add("cells.csv", [&](std::ostream& o) { writeCellsCsv(o, result); });
+  add("singular.csv", [&](std::ostream& o) { writeSingularCsv(o, result); });
+  if (!result.summary.topology.certified)
+    add("uncertified.csv", [&](std::ostream& o) { writeUncertifiedCsv(o, result); });
+  if (const ApplicationData* app = result.application.get()) {
+    add("input.ply", [&](std::ostream& o) { writeInputPly(o, app->input); });
+    if (app->secondImage && result.k == 1)
+      add("ruled.ply", [&](std::ostream& o) { writeRuledPly(o, result); });
+  }
+  add("summary.json", [&](std::ostream& o) { o << toJson(result.summary); });
+
+  // Stage: every file into a hidden folder inside `dir` first, so that a full disk or an
+  // interrupt while writing leaves the previous run untouched (an interrupt removes the
+  // staging folder: see installInterruptCleanup).
+  const auto staging = dir / (".ndcontour-partial-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(staging, error);
+  std::filesystem::create_directory(staging, error);
+  if (error) throw InputError(dir.string() + ": cannot create a temporary folder in it");
+  copyPath(cleanup.folder, staging);
+  const auto abandon = [&](const std::string& message) {
+    std::error_code ignored;
+    std::filesystem::remove_all(staging, ignored);
+    cleanup.count = 0;
+    cleanup.folder[0] = '\0';
+    throw InputError(message);
+  };
+  for (const auto& [name, text] : files) {
+    if (cleanup.count < static_cast<sig_atomic_t>(InterruptCleanup::kPaths)) {
+      copyPath(cleanup.files[cleanup.count], staging / name);
+      cleanup.count = cleanup.count + 1;
+    }
+    std::ofstream out(staging / name, std::ios::binary);
+    out << text;
+    out.flush();
+    if (!out) abandon((dir / name).string() + ": cannot write the file (disk full?)");
+  }
+  // Publish with SIGINT and SIGTERM held: the previous summary goes first (the folder reads as
+  // unfinished while files are replaced), and so do the previous outputs this run does not
+  // write (input.ply of an application problem, uncertified.csv of an uncertified run);
+  // summary.json last marks a finished run.
+  const BlockInterrupts hold;
+  const auto written = [&](const std::string& name) {
+    for (const auto& f : files)
+      if (f.first == name) return true;
+    return false;
+  };
+  for (const char* name : {"summary.json", "input.ply", "ruled.ply", "uncertified.csv"})
+    if (std::string(name) == "summary.json" || !written(name)) {
+      std::filesystem::remove(dir / name, error);
+      if (error) abandon((dir / name).string() + ": cannot remove the previous output");
+    }
+  std::vector<std::string> names;
+  for (const auto& [name, text] : files) {
+    std::filesystem::rename(staging / name, dir / name, error);
+    if (error) abandon((dir / name).string() + ": cannot write the file: " + error.message());
+    names.push_back(name);
+  }
+  std::filesystem::remove(staging, error);
+  cleanup.count = 0;
+  cleanup.folder[0] = '\0';
+  // The run is published: a timeout held back until here has nothing left to stop.
+  cleanup.published = 1;
+  return names;
+}
+
+}  // namespace ndc

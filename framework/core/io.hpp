@@ -1,0 +1,67 @@
+/// \file io.hpp
+/// Output files of a run (docs/contracts.md 4.3-4.5): summary.json, mesh.ply, cells.csv and
+/// singular.csv.
+#pragma once
+
+#include <filesystem>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "framework/core/result.hpp"
+
+namespace ndc {
+
+/// Writes the mesh as ASCII PLY: vertices with float64 `x y z` (the first three coordinates,
+/// zero-padded for n = 2) and `u0 .. u{n-1}`; `face` with `vertex_indices` (k = 2) or `edge`
+/// with `vertex1 vertex2` (k = 1).
+void writePly(std::ostream& out, const RunResult& result);
+
+/// Writes cells.csv: cell number, multi-index, centre, class, projected point.
+void writeCellsCsv(std::ostream& out, const RunResult& result);
+
+/// Writes singular.csv: the header `point,sigma_min,u0,..,u{n-1}`, then one row per located
+/// singular point of M (its number, the smallest singular value of the Jacobian there, and its
+/// n coordinates). Only the header when there is none.
+void writeSingularCsv(std::ostream& out, const RunResult& result);
+
+/// Writes uncertified.csv: the header `kind,level,reason,lo0,hi0,..`, then one row per cell
+/// left uncertified at the maximum depth (`cell`, its level, which part of the certificate
+/// failed, its box) and one per located singular point (`singular_point`, sigma_min, the point
+/// as a box of width 0). Written only when the run is not certified.
+void writeUncertifiedCsv(std::ostream& out, const RunResult& result);
+
+/// `s` as a JSON string literal (quotes, backslashes and control characters escaped).
+std::string jsonQuoted(const std::string& s);
+
+/// Writes `text` to `target` through a temporary file in the same directory renamed into place,
+/// so that a reader never sees half a file and a failure leaves the previous file alone. Throws
+/// ndc::InputError when the file cannot be written.
+void writeAtomically(const std::filesystem::path& target, const std::string& text);
+
+/// Writes mesh.ply, cells.csv, singular.csv, uncertified.csv when the run is not certified
+/// (input.ply and ruled.ply for applications that
+/// have them) and last summary.json into `dir` (created if needed); returns the file names
+/// written, in that order. Every file is first written into a hidden staging folder in `dir`
+/// (`.ndcontour-partial-PID`): a full disk or an interrupt there leaves the previous run whole.
+/// Then, with SIGINT and SIGTERM blocked, the previous summary.json is removed and the files
+/// are renamed into place, summary.json (whose presence marks a finished run) last. Throws
+/// ndc::InputError if `dir` cannot be written.
+std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const RunResult& result);
+
+/// Installs SIGINT and SIGTERM handlers for a `solve`: they remove writeOutputs' staging
+/// folder if one is being written and exit with status 128 + the signal (130, 143) at once.
+/// Nothing in `--out` has been touched before the outputs are published, so earlier results
+/// stay as they were.
+void installInterruptCleanup();
+
+/// Arms a wall-clock limit of `seconds` for a `solve`: when it expires, the staging folder of
+/// writeOutputs (if one is being written) is removed, `line` is printed on standard error and
+/// the process exits with `status`. An expiry while the outputs are being published waits for
+/// the publication to end and is then ignored: the run finished.
+void armTimeout(double seconds, const std::string& line, int status);
+
+/// Stops the limit of armTimeout: the run is finished and only prints what it found.
+void disarmTimeout();
+
+}  // namespace ndc

@@ -1,0 +1,545 @@
+#include "framework/pipeline/pipeline.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <optional>
+#include <random>
+#include <sstream>
+#include <type_traits>
+#include <variant>
+
+#include "framework/core/analysis.hpp"
+#include "framework/core/application.hpp"
+#include "framework/core/bernstein.hpp"
+#include "framework/core/budget.hpp"
+#include "framework/core/grid.hpp"
+#include "framework/core/scalar.hpp"
+#include "framework/core/system.hpp"
+#include "framework/pipeline/singular.hpp"
+#include "strategies/bounding/bounding.hpp"
+#include "strategies/classification/classification.hpp"
+#include "strategies/connection/connection.hpp"
+#include "strategies/projection/newton.hpp"
+#include "strategies/subdivision/subdivision.hpp"
+
+namespace ndc {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// The grid of the run: the problem domain, shifted by a seeded sub-cell offset when
+/// `--jitter` is given (so M avoids the lower-dimensional faces of the grid).
+Grid makeGrid(const Problem& problem, const Settings& settings) {
+  Grid grid;
+  grid.n = problem.n();
+  grid.depth = settings.depth;
+  grid.domain = problem.domain;
+  if (settings.jitter) {
+    std::mt19937_64 rng(*settings.jitter);
+    std::uniform_real_distribution<double> offset(0.05, 0.45);
+    for (int j = 0; j < grid.n; ++j) {
+      const double shift = offset(rng) * grid.cellWidth(j);
+      grid.domain.lo[j] -= shift;
+      grid.domain.hi[j] -= shift;
+    }
+  }
+  return grid;
+}
+
+template <class S>
+Box<S> toScalarBox(const Box<double>& box) {
+  Box<S> out;
+  for (int j = 0; j < box.dim(); ++j) {
+    out.lo.push_back(S(box.lo[j]));
+    out.hi.push_back(S(box.hi[j]));
+  }
+  return out;
+}
+
+/// The most solution cells a k-manifold can plausibly meet at depth L in R^n: a k-manifold of
+/// moderate size meets about c 2^(k L) cells of the final grid; the budget allows c up to
+/// 2^(n + 6), capped at 2^27 (the memory guard's scale). More cells mean a zero set of a
+/// higher dimension (x - x fills its domain: 2^(n L) cells).
+std::int64_t cellBudget(const Problem& problem, int depth) {
+  const int exponent = std::min(problem.k() * depth + problem.n() + 6, 27);
+  return std::int64_t{1} << exponent;
+}
+
+/// What is left of a budget of `maxCells` solution cells once `used` are found (subdivide
+/// reads 0 as no budget, so an exhausted budget is exceeded here).
+std::int64_t remaining(std::int64_t maxCells, std::size_t used) {
+  const std::int64_t left = maxCells - static_cast<std::int64_t>(used);
+  if (left <= 0)
+    throw CellBudgetExceeded("more than " + std::to_string(maxCells) + " solution cells");
+  return left;
+}
+
+/// The message for more solution cells than a k-manifold can meet (cellBudget).
+std::string notAManifold(const Problem& problem, const Settings& settings, std::int64_t cells) {
+  return problem.path + ": more than " + std::to_string(cells) + " solution cells at depth " +
+         std::to_string(settings.depth) +
+         " (2^(k L + n + 6) with k = " + std::to_string(problem.k()) +
+         ", L = " + std::to_string(settings.depth) + "): the zero set is not a " +
+         std::to_string(problem.k()) +
+         "-manifold (an equation that vanishes on a region, such as x - x, or equations that "
+         "depend on each other)";
+}
+
+/// The memory budget of a run and what it allows (design of the estimate: docs/
+/// input-limits.md, "Budgets").
+struct MemoryPlan {
+  double budget = 0;   ///< bytes the run may use
+  double perCell = 0;  ///< bytes per solution cell (bytesPerSolutionCell)
+  double base = 0;     ///< bytes whatever the size (baseRunBytes)
+  bool byDefault = true;
+  std::int64_t maxCells = 0;  ///< solution cells the budget holds
+
+  /// Bytes for `cells` solution cells.
+  double bytes(double cells) const { return base + cells * perCell; }
+
+  /// The refusal of a run that needs `cells` solution cells: `prefix` ("more than ") and
+  /// `suffix` (how the count is known) qualify the count.
+  std::string overBudget(const Problem& problem, const Settings& settings, double cells,
+                         const std::string& prefix = "", const std::string& suffix = "") const {
+    char count[32];
+    std::snprintf(count, sizeof count, cells < 1e7 ? "%.0f" : "%.3g", cells);
+    return problem.path + ": depth " + std::to_string(settings.depth) + " needs " +
+           (prefix.empty() ? "about " : prefix) + formatBytes(bytes(cells)) + " of memory (" +
+           prefix + count + " solution cells" + suffix + "), over the budget of " +
+           formatBytes(budget) +
+           (byDefault ? " (" + std::to_string(std::lround(kDefaultMemoryShare * 100)) +
+                            "% of this machine's memory)"
+                      : "") +
+           ": use a smaller depth, or --max-memory if the machine has more";
+  }
+};
+
+/// The memory plan of a run: its budget, and a refusal before any long work of a depth that
+/// cannot fit. A k-manifold meets about c 2^(k L) cells of the depth-L grid, so where the
+/// a-priori bound (cellBudget, and the 2^(n L) cells of the grid) does not fit the budget, a
+/// trial subdivision at coarser depths (`count(grid)`: the solution cells there) measures c
+/// and the count at depth L is extrapolated by 2^k per level. At coarse depths the ratio per
+/// level is at most 2^k for a smooth M, so the extrapolation errs high; what it misses (a
+/// feature too small for the trial) is refused after the real subdivision, which counts
+/// exactly, and the address-space limit catches the rest.
+template <class Count>
+MemoryPlan planMemory(const Problem& problem, const Settings& settings, const Grid& grid,
+                      const Count& count) {
+  MemoryPlan plan;
+  plan.byDefault = settings.maxMemoryBytes == 0;
+  plan.budget =
+      static_cast<double>(plan.byDefault ? defaultMemoryBudget() : settings.maxMemoryBytes);
+  plan.perCell =
+      bytesPerSolutionCell(problem.n(), problem.k(), settings.scalar, settings.precisionBits);
+  plan.base = baseRunBytes(problem.n());
+  if (plan.budget <= plan.base)
+    throw InputError(problem.path + ": the memory budget of " + formatBytes(plan.budget) +
+                     " is below the " + formatBytes(plan.base) + " any run of " +
+                     std::to_string(problem.n()) + " variables needs (--max-memory)");
+  const double cellsFit = std::floor((plan.budget - plan.base) / plan.perCell);
+  plan.maxCells = static_cast<std::int64_t>(std::min(cellsFit, 9e18));
+
+  const int L = settings.depth, k = problem.k();
+  const double crude = std::min(static_cast<double>(cellBudget(problem, L)),
+                                std::ldexp(1.0, std::min(problem.n() * L, 1000)));
+  if (plan.bytes(crude) <= plan.budget) return plan;
+  // The trial: coarse depths until the count is large enough to extrapolate from, or a second
+  // of work is spent.
+  constexpr std::size_t kEnough = 2048;
+  constexpr double kTrialSeconds = 1.0;
+  const auto start = Clock::now();
+  for (int depth = std::max(1, problem.rootLevel); depth < L; ++depth) {
+    Grid trial = grid;
+    trial.depth = depth;
+    std::size_t found = 0;
+    try {
+      found = count(trial);
+    } catch (const CellBudgetExceeded&) {
+      Settings at = settings;
+      at.depth = depth;
+      throw InputError(notAManifold(problem, at, cellBudget(problem, depth)));
+    }
+    if (found >= kEnough || depth == L - 1 || secondsSince(start) > kTrialSeconds) {
+      const double estimate = static_cast<double>(found) * std::ldexp(1.0, k * (L - depth));
+      if (plan.bytes(estimate) > plan.budget)
+        throw InputError(plan.overBudget(
+            problem, settings, estimate, "",
+            ", estimated from " + std::to_string(found) + " at depth " + std::to_string(depth)));
+      break;
+    }
+  }
+  return plan;
+}
+
+/// ZeroSetSubdiv over the B-spline patches of a problem (Problem::roots): each patch is
+/// subdivided on its own, with its own Bernstein forms, down to the cells of the common grid, so
+/// the solution cells (and everything built from them) form one grid across patch boundaries.
+template <class S>
+SolutionCells subdividePatches(const Problem& problem, const Settings& settings,
+                               const Subdivision& subdivision, const Grid& grid,
+                               const Progress& progress, std::int64_t maxCells) {
+  const int n = grid.n, below = grid.depth - problem.rootLevel;
+  SolutionCells cells;
+  cells.grid = grid;
+  std::vector<std::int32_t> global(n);
+  const double roots = static_cast<double>(problem.roots.size());
+  for (std::size_t r = 0; r < problem.roots.size(); ++r) {
+    const Box<double>& root = problem.roots[r];
+    Grid sub{n, below, root};
+    const Bounding<S> bounding =
+        createBounding<S>(settings.bounding, problem, toScalarBox<S>(root));
+    Progress part;
+    if (progress) part = [&](const char* stage, double f) { progress(stage, (r + f) / roots); };
+    const SolutionCells found =
+        subdivide<S>(bounding, subdivision, sub, part, remaining(maxCells, cells.size()));
+    cells.visited += found.visited;
+    // The patch's cell index at level J, then the cell's index inside it.
+    for (std::size_t c = 0; c < found.size(); ++c) {
+      const auto local = found.cell(c);
+      for (int j = 0; j < n; ++j) {
+        const double at = (root.lo[j] - grid.domain.lo[j]) / grid.domain.width(j);
+        const auto patch =
+            static_cast<std::int32_t>(std::llround(at * std::ldexp(1.0, problem.rootLevel)));
+        global[j] = (patch << below) + local[j];
+      }
+      cells.add(global);
+    }
+  }
+  return cells;
+}
+
+/// The largest error of a double Bernstein form of `e` on `box`, relative to the largest
+/// coefficient, against the same form computed in 256-bit MPFR (from the exact decimal
+/// literals): cancellation such as `(x + 1e16)^2 - 1e32 - 2e16*x` leaves nothing of x^2 in double.
+double precisionLoss(const Expression& e, const Box<double>& box, const Bernstein<double>& form) {
+  struct Restore {
+    unsigned bits = mpfrPrecision();
+    ~Restore() { setMpfrPrecision(bits); }
+  } restore;
+  setMpfrPrecision(256);
+  const Bernstein<Mpfr> exact = e.toBernstein<Mpfr>(toScalarBox<Mpfr>(box));
+  double largest = 0, error = 0;
+  for (std::size_t j = 0; j < exact.coefficients().size(); ++j) {
+    const Mpfr& c = exact.coefficients()[j];
+    largest = std::max(largest, std::abs(toDouble(c)));
+    error = std::max(error, std::abs(toDouble(Mpfr(form.coefficients()[j]) - c)));
+  }
+  if (largest == 0) return error > 0 ? std::numeric_limits<double>::infinity() : 0;
+  return error / largest;
+}
+
+/// Refuses equations whose Bernstein form on the domain (or on a B-spline patch) is zero (the
+/// equation vanishes there: its zero set fills the region, `x - x`), not finite in double, or,
+/// in a double run, so large that subdividing it would overflow (1e308 * x^2 + ...) or so
+/// inexact that its zero set is noise (precisionLoss above 1e-6, checked on the first 8 boxes).
+template <class S>
+std::vector<double> checkEquations(const Problem& problem, const Box<S>& domain) {
+  constexpr double kMaxPrecisionLoss = 1e-6;
+  constexpr std::size_t kPrecisionBoxes = 8;
+  constexpr double kLimit = 1e300;
+  std::vector<Box<S>> boxes;
+  if (problem.roots.empty()) boxes.push_back(domain);
+  for (const Box<double>& patch : problem.roots) boxes.push_back(toScalarBox<S>(patch));
+  std::vector<double> losses(problem.equations.size(), 0.0);
+  for (std::size_t i = 0; i < problem.equations.size(); ++i) {
+    for (std::size_t b = 0; b < boxes.size(); ++b) {
+      const Box<S>& box = boxes[b];
+      const Bernstein<S> form = problem.equations[i].template toBernstein<S>(box);
+      if constexpr (std::is_same_v<S, double>) {
+        const double loss =
+            b < kPrecisionBoxes ? precisionLoss(problem.equations[i], box, form) : 0.0;
+        losses[i] = std::max(losses[i], loss);
+        if (loss > kMaxPrecisionLoss) {
+          std::ostringstream o;
+          o << problem.path << ": equation " << i + 1 << " loses its precision in double "
+            << "arithmetic (its Bernstein coefficients are off by " << loss
+            << " of the largest, against 256-bit arithmetic): use --scalar mpfr, or expand and "
+            << "simplify it";
+          throw InputError(o.str());
+        }
+      }
+      bool zero = true;
+      for (const S& c : form.coefficients()) {
+        using std::abs;
+        zero = zero && c == S(0);
+        // Residuals, outputs and the crossing's level are in double in every scalar.
+        if (!std::isfinite(toDouble(c)))
+          throw InputError(problem.path + ": equation " + std::to_string(i + 1) +
+                           " overflows on the domain (a Bernstein coefficient is beyond the "
+                           "range of double): rescale the input");
+        if (std::is_same_v<S, double> && !(abs(c) <= S(kLimit))) {
+          std::ostringstream o;
+          o << problem.path << ": equation " << i + 1 << " reaches " << toDouble(c)
+            << " on the domain (its Bernstein coefficients must stay below " << kLimit
+            << " in magnitude for double arithmetic): rescale it, or use --scalar mpfr";
+          throw InputError(o.str());
+        }
+      }
+      if (zero)
+        throw InputError(problem.path + ": equation " + std::to_string(i + 1) +
+                         " vanishes everywhere on " +
+                         (problem.roots.empty() ? "the domain" : "a B-spline patch") +
+                         ": its zero set is a region, not a hypersurface");
+    }
+  }
+  return losses;
+}
+
+/// The rounding bound of each equation's Bernstein coefficients (relative to the largest) that
+/// the certificate assumes: in double the measured loss against 256-bit arithmetic, with a
+/// factor of 4 for the boxes not measured (B-spline patches beyond the first 8); in MPFR the
+/// conversion is exact to far below what any certificate resolves.
+std::vector<double> coefficientErrors(const std::vector<double>& losses) {
+  std::vector<double> out;
+  for (double loss : losses) out.push_back(4 * loss);
+  return out;
+}
+
+/// The children of a cell that the run's bounding cannot exclude (adaptive refinement): the
+/// subdivision of the cell's box by one level.
+template <class S>
+std::vector<std::uint8_t> refineCell(const Problem& problem, const Settings& settings,
+                                     const Subdivision& subdivision, const Box<double>& cell) {
+  const int n = problem.n();
+  const Bounding<S> bounding = createBounding<S>(settings.bounding, problem, toScalarBox<S>(cell));
+  const SolutionCells children = subdivide<S>(bounding, subdivision, Grid{n, 1, cell});
+  std::vector<std::uint8_t> flags(std::size_t{1} << n, 0);
+  for (std::size_t c = 0; c < children.size(); ++c) {
+    std::size_t bits = 0;
+    const auto index = children.cell(c);
+    for (int j = 0; j < n; ++j) bits |= std::size_t(index[j] & 1) << j;
+    flags[bits] = 1;
+  }
+  return flags;
+}
+
+/// A certified run must give a manifold mesh; the welded mesh is checked once more, so that a
+/// flaw between the certificate and the output (welding, joining at singular points) can
+/// never reach the user as a certified wrong answer.
+void checkCertificate(Summary& summary) {
+  TopologyRecord& t = summary.topology;
+  if (!t.certified) return;
+  const MeshStats& m = summary.mesh;
+  std::string flaw;
+  if (m.nonmanifoldEdges > 0) flaw = "non-manifold edges";
+  if (summary.k == 1 && m.branchVertices > 0) flaw = "branch vertices";
+  if (!summary.singularPoints.empty()) flaw = "singular points";
+  if (flaw.empty()) return;
+  t.certified = false;
+  t.reason = "the certificate holds but the welded mesh has " + flaw;
+}
+
+template <class S>
+RunResult run(const Problem& problem, const Settings& settings, const Progress& progress) {
+  const auto start = Clock::now();
+  RunResult result;
+  result.n = problem.n();
+  result.k = problem.k();
+  Summary& summary = result.summary;
+  summary.problem = problem.name;
+  summary.n = problem.n();
+  summary.k = problem.k();
+  summary.settings = settings;
+  summary.settings.precisionBits = ScalarTraits<S>::precisionBits();
+
+  // Choose every strategy by name before any work, so a bad name costs nothing.
+  const Grid grid = makeGrid(problem, settings);
+  const Box<S> domain = toScalarBox<S>(grid.domain);
+  const System<S> system(problem);
+  const std::vector<double> losses = checkEquations<S>(problem, domain);
+  if (!problem.roots.empty() && settings.jitter)
+    throw InputError(
+        problem.path +
+        ": --jitter cannot be used with B-spline input: the knots must stay on grid planes");
+  if (settings.depth < problem.rootLevel)
+    throw InputError("depth " + std::to_string(settings.depth) + " is below " +
+                     std::to_string(problem.rootLevel) +
+                     ", the level at which every B-spline knot span is a grid cell");
+  // One bounding over the domain, or one per B-spline patch (built in subdividePatches).
+  const std::optional<Bounding<S>> bounding =
+      problem.roots.empty()
+          ? std::optional<Bounding<S>>(createBounding<S>(settings.bounding, problem, domain))
+          : std::nullopt;
+  const Subdivision subdivision = createSubdivision(settings.subdivision);
+  const Projection<S> projection = createProjection<S>(settings.projection, system);
+  const Classification classification = createClassification(settings.classification);
+  const Connection connection = createConnection(settings.connection);
+
+  // Alg. 1 (1): ZeroSetSubdiv at a depth, with a budget of solution cells.
+  const auto subdivideAt = [&](const Grid& at, std::int64_t maxCells, const Progress& report) {
+    return bounding ? subdivide<S>(*bounding, subdivision, at, report, maxCells)
+                    : subdividePatches<S>(problem, settings, subdivision, at, report, maxCells);
+  };
+  const MemoryPlan plan = planMemory(problem, settings, grid, [&](const Grid& at) {
+    return subdivideAt(at, cellBudget(problem, at.depth), Progress{}).size();
+  });
+  summary.memoryBudget = plan.budget;
+
+  // The solution cells of the final depth.
+  auto t = Clock::now();
+  const std::int64_t maxCells = std::min(cellBudget(problem, settings.depth), plan.maxCells);
+  const SolutionCells cells = [&] {
+    try {
+      return subdivideAt(grid, maxCells, progress);
+    } catch (const CellBudgetExceeded&) {
+      throw InputError(maxCells < cellBudget(problem, settings.depth)
+                           ? plan.overBudget(problem, settings, maxCells + 1, "more than ")
+                           : notAManifold(problem, settings, maxCells));
+    }
+  }();
+  // Now the count is known: refuse before the memory-hungry stages what cannot fit.
+  summary.estimatedMemory = plan.bytes(static_cast<std::int64_t>(cells.size()));
+  if (summary.estimatedMemory > plan.budget)
+    throw InputError(plan.overBudget(problem, settings, static_cast<std::int64_t>(cells.size())));
+  summary.tSubdivision = secondsSince(t);
+  summary.visited = cells.visited;
+  summary.solution = static_cast<std::int64_t>(cells.size());
+
+  // Alg. 1: project each cell's centroid onto M, then classify the cell.
+  t = Clock::now();
+  const Projections<S> projections = projectCells<S>(projection, cells, domain, progress);
+  const std::vector<CellClass> classes =
+      classifyCells<S>(classification, cells, domain, projections);
+  summary.tProjection = secondsSince(t);
+  for (CellClass c : classes) {
+    if (c == CellClass::kNormal) ++summary.normal;
+    if (c == CellClass::kAbnormal) ++summary.abnormal;
+    if (c == CellClass::kFailed) ++summary.failed;
+  }
+
+  // Alg. 1: connect the cells into a complex.
+  const Projector<S> project = makeProjector<S>(projection);
+  t = Clock::now();
+  ConnectionInput<S> input{problem, system, cells, projections, classes, project, problem.k()};
+  input.maxLevel = maxDepthOf(problem, settings);
+  input.tolerance = settings.tolerance;
+  input.refine = [&](const Box<double>& cell) {
+    return refineCell<S>(problem, settings, subdivision, cell);
+  };
+  input.coefficientError = coefficientErrors(losses);
+  ConnectionOutput<S> connected = connect<S>(connection, input);
+  summary.tConnection = secondsSince(t);
+  summary.topology = connected.topology;
+  if (settings.connection != "crossing") {
+    summary.topology.baseLevel = summary.topology.maxLevel = settings.depth;
+    summary.topology.maxDepth = settings.depth;
+    summary.topology.reason =
+        "the " + settings.connection + " connection does not certify topology (crossing does)";
+  }
+  summary.ambiguousCells = connected.ambiguousCells;
+  summary.singularCells = connected.singularCells;
+  summary.offManifoldVertices = connected.offManifoldVertices;
+  summary.perturbation = connected.perturbation;
+
+  // Analysis on the welded mesh.
+  t = Clock::now();
+  double diameter = 0;
+  for (int j = 0; j < problem.n(); ++j) diameter = std::max(diameter, grid.domain.width(j));
+  // Where the Jacobian loses rank on M: located and reported (framework/pipeline/singular.hpp), and
+  // the mesh joined there before welding.
+  summary.singularPoints =
+      findSingularPoints<S>(problem, system, cells, projections, domain).points;
+  joinAtSingularPoints<S>(connected.complex, summary.singularPoints, grid);
+  const Complex<S> welded = weld<S>(connected.complex, 1e-9 * diameter);
+  summary.mesh = analyse<S>(welded, system, project);
+  summary.tAnalysis = secondsSince(t);
+  checkCertificate(summary);
+
+  // Outputs in double.
+  for (const S& v : welded.vertices) result.vertices.push_back(toDouble(v));
+  result.simplices = welded.simplices;
+  result.cellIndex = cells.index;
+  result.cellClass = classes;
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    const Box<S> box = cellBox(grid, domain, cells.cell(c));
+    for (int j = 0; j < problem.n(); ++j) {
+      result.cellCentre.push_back(toDouble(S((box.lo[j] + box.hi[j]) / 2)));
+      result.cellPoint.push_back(toDouble(projections.at(c)[j]));
+    }
+  }
+  // Application problems: the image map, and where its denominator vanishes on the mesh.
+  if (problem.application) {
+    result.application = problem.application;
+    summary.application = problem.application->name;
+    summary.singularName = problem.application->singularName;
+    const std::size_t count = result.vertices.size() / static_cast<std::size_t>(problem.n());
+    for (std::size_t v = 0; v < count; ++v) {
+      bool singular = false;
+      problem.application->image(
+          std::span<const double>(result.vertices.data() + v * problem.n(), problem.n()),
+          &singular);
+      summary.imageSingularVertices += singular;
+    }
+  }
+  summary.tTotal = secondsSince(start);
+  return result;
+}
+
+}  // namespace
+
+int defaultMaxDepth(int n, int depth) {
+  int level = depth + kDefaultRefinementLevels;
+  while (level > depth && !Grid::fits(n, level)) --level;
+  return level;
+}
+
+int maxDepthOf(const Problem& problem, const Settings& settings) {
+  if (settings.maxDepth == 0) return defaultMaxDepth(problem.n(), settings.depth);
+  if (settings.maxDepth < settings.depth || !Grid::fits(problem.n(), settings.maxDepth)) {
+    throw InputError(problem.path + ": --max-depth " + std::to_string(settings.maxDepth) +
+                     " is out of range for depth " + std::to_string(settings.depth) +
+                     " and n = " + std::to_string(problem.n()) +
+                     " (need depth <= max-depth, n * max-depth <= 64 and max-depth <= 30)");
+  }
+  return settings.maxDepth;
+}
+
+RunResult runPipeline(const Problem& problem, const Settings& settings, const Progress& progress) {
+  if (settings.depth < 1 || !Grid::fits(problem.n(), settings.depth)) {
+    throw InputError(problem.path + ": depth " + std::to_string(settings.depth) +
+                     " is out of range for n = " + std::to_string(problem.n()) +
+                     " (need 1 <= depth and n * depth <= 64)");
+  }
+  maxDepthOf(problem, settings);  // refuses a bad --max-depth before any work
+  // The default connection builds curves and surfaces only: refuse other k before any work.
+  if (settings.connection == "crossing" && problem.k() != 1 && problem.k() != 2) {
+    throw InputError(problem.path + ": the crossing connection supports k = 1 (curves) and k = 2 " +
+                     "(surfaces); this problem has k = " + std::to_string(problem.k()) +
+                     " (n - m); use --connection paper or naive for k >= 3");
+  }
+  // Cells must stay wider than the rounding of their coordinates (and than subnormal numbers),
+  // or neighbouring grid planes coincide and cells collapse.
+  const double eps = std::numeric_limits<double>::epsilon();
+  for (int j = 0; j < problem.n(); ++j) {
+    const double lo = problem.domain.lo[j], hi = problem.domain.hi[j];
+    const double width = std::ldexp(hi - lo, -settings.depth);
+    if (!(width > 64 * eps * std::max(std::abs(lo), std::abs(hi))) ||
+        !(width > std::numeric_limits<double>::min() / eps)) {
+      std::ostringstream o;
+      o << problem.path << ": depth " << settings.depth << " is too deep for the domain [" << lo
+        << ", " << hi << "] of '" << problem.variables[j] << "': its cells (width " << width
+        << ") are below the rounding of their coordinates";
+      throw InputError(o.str());
+    }
+  }
+  if (settings.scalar == "double") return run<double>(problem, settings, progress);
+  if (settings.scalar == "mpfr") {
+    // The run's precision applies to this run only: restore the caller's afterwards.
+    struct Restore {
+      unsigned bits = mpfrPrecision();
+      ~Restore() { setMpfrPrecision(bits); }
+    } restore;
+    setMpfrPrecision(settings.precisionBits);
+    return run<Mpfr>(problem, settings, progress);
+  }
+  throw InputError("unknown scalar '" + settings.scalar + "' (expected double or mpfr)");
+}
+
+}  // namespace ndc

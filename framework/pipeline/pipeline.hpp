@@ -1,0 +1,50 @@
+/// \file pipeline.hpp
+/// The pipeline of docs/algorithm1.md (paper, Algorithm 1): problem -> subdivision with bounding ->
+/// solution cells -> projection -> classification -> connection -> complex -> analysis.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string_view>
+#include <vector>
+
+#include "framework/core/application.hpp"
+#include "framework/core/complex.hpp"
+#include "framework/core/problem.hpp"
+#include "framework/core/result.hpp"
+#include "framework/core/strategy.hpp"
+#include "framework/core/summary.hpp"
+
+namespace ndc {
+
+/// Names accepted for the scalar type (`--scalar`, `scalar` in experiment configs); the strategy
+/// families' names are their own lists (kBoundingNames in strategies/bounding/bounding.hpp, ...).
+inline constexpr std::array<std::string_view, 2> kScalarNames = {"double", "mpfr"};
+/// Accepted ranges of the numeric settings (`--depth`, `--precision`).
+inline constexpr int kMinDepth = 1, kMaxDepth = 30;
+inline constexpr unsigned kMinPrecision = 24, kMaxPrecision = 4096;
+/// Working precision of `--scalar mpfr` when `--precision` is not given.
+inline constexpr unsigned kDefaultMpfrPrecision = 128;
+
+/// Runs the whole pipeline on a problem with the given settings. Strategy names are checked
+/// first (ndc::InputError on unknown names or a depth the grid cannot hold); the scalar is
+/// chosen at run time (`settings.scalar`, `settings.precisionBits`). `progress` may be empty.
+RunResult runPipeline(const Problem& problem, const Settings& settings,
+                      const Progress& progress = {});
+
+/// Levels below `--depth` that adaptive refinement may reach by default: genus2 at depth 5
+/// needs 6, the two circles 0.001 apart of curve-pair-close 9 (docs/certificate.md); the leaf
+/// budget bounds the cost where refinement cannot succeed. `--max-depth` equal to `--depth`
+/// turns it off.
+inline constexpr int kDefaultRefinementLevels = 10;
+
+/// The default `--max-depth`: depth + kDefaultRefinementLevels, or less where the cell keys
+/// of the 2^n-tree would not fit (n * level <= 64).
+int defaultMaxDepth(int n, int depth);
+
+/// The maximum level of refinement of a run: settings.maxDepth, or the default when it is 0;
+/// throws InputError when it is below the depth or does not fit.
+int maxDepthOf(const Problem& problem, const Settings& settings);
+
+}  // namespace ndc

@@ -1,0 +1,572 @@
+#include "framework/pipeline/singular.hpp"
+
+#include <boost/multiprecision/eigen.hpp>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <span>
+#include <unordered_map>
+#include <utility>
+
+#include "framework/core/bernstein.hpp"
+#include "strategies/projection/newton.hpp"
+
+namespace ndc {
+namespace {
+
+template <class S>
+using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+template <class S>
+using Vector = Eigen::Matrix<S, Eigen::Dynamic, 1>;
+
+template <class S>
+bool isFinite(const S& v) {
+  using std::isfinite;
+  return isfinite(v);
+}
+
+/// Smallest and largest singular value of an m x n matrix, m <= n.
+template <class S>
+std::pair<S, S> sigmaRange(const Matrix<S>& a) {
+  if (a.rows() == 1) {
+    const S s = a.norm();
+    return {s, s};
+  }
+  const Vector<S> v = Eigen::JacobiSVD<Matrix<S>>(a).singularValues();
+  return {v(v.size() - 1), v(0)};
+}
+
+/// The Bernstein data of one block of the grid at the block level (step 1).
+template <class S>
+struct Block {
+  std::vector<Bernstein<S>> forms;  ///< F_i on the block
+  std::vector<S> lipschitz;         ///< m: Frobenius bound of the Hessian of F_i on the block
+  std::vector<S> slope;             ///< m x n: largest |coefficient| of dF_i/dx_j on the block
+};
+
+/// A start that Gauss-Newton brought to a singular point.
+template <class S>
+struct Located {
+  std::vector<S> x;
+  S sigma = 0;        ///< sigma_min(J(x))
+  S scaledSigma = 0;  ///< sigma_min(^J(x))
+};
+
+template <class S>
+class Search {
+ public:
+  Search(const Problem& problem, const System<S>& system, const SolutionCells& cells,
+         const Projections<S>& projections, const Box<S>& domain, const SingularOptions& options)
+      : problem_(problem),
+        system_(system),
+        cells_(cells),
+        projections_(projections),
+        domain_(domain),
+        options_(options),
+        newton_(system),
+        grid_(cells.grid),
+        n_(system.n()),
+        m_(system.m()),
+        eps_(ScalarTraits<S>::epsilon()) {
+    blockLevel_ = std::min(grid_.depth, std::max(options.blockLevel, problem.rootLevel));
+    maxIterations_ = options.maxIterations > 0
+                         ? options.maxIterations
+                         : 40 + static_cast<int>(ScalarTraits<S>::precisionBits());
+    f_.resize(m_);
+    jac_.resize(std::size_t(m_) * n_);
+    tol_.resize(m_);
+    scale_.assign(m_, S(0));
+    // Acceptance region: the closed domain of the grid and of the problem, with a slack of
+    // rounding.
+    for (int j = 0; j < n_; ++j) {
+      using std::max;
+      using std::min;
+      const S slack = S(64) * eps_ * (domain.hi[j] - domain.lo[j]);
+      inLo_.push_back(max(domain.lo[j], S(problem.domain.lo[j])) - slack);
+      inHi_.push_back(min(domain.hi[j], S(problem.domain.hi[j])) + slack);
+      width_ = max(width_, S(domain.hi[j] - domain.lo[j]));
+      cellWidth_.push_back((domain.hi[j] - domain.lo[j]) / S(double(grid_.cellsPerAxis())));
+    }
+  }
+
+  SingularSearch run();
+
+ private:
+  const Block<S>& blockFor(std::span<const std::int32_t> cell);
+  const std::vector<Bernstein<S>>& rootFor(std::span<const std::int32_t> cell);
+  CellKey blockKey(std::span<const std::int32_t> cell) const;
+  bool excluded(std::span<const std::int32_t> cell, SingularSearch& out);
+  S score(std::size_t c);
+  bool locate(std::span<const S> start, Located<S>& result);
+  bool accept(const std::vector<S>& x, Located<S>& result);
+  /// F(x)/s, ^J(x)^T v and (|v|^2 - 1)/2 into g, ^J(x) into jhat; false if not finite.
+  bool residual(const std::vector<S>& x, const Vector<S>& v, Vector<S>& g, Matrix<S>& jhat);
+
+  const Problem& problem_;
+  const System<S>& system_;
+  const SolutionCells& cells_;
+  const Projections<S>& projections_;
+  const Box<S>& domain_;
+  const SingularOptions& options_;
+  const NewtonProjection<S> newton_;  // its backward-error tolerance
+  const Grid& grid_;
+  const int n_, m_;
+  const S eps_;
+  int blockLevel_ = 0, maxIterations_ = 0;
+  S width_ = 0;
+  std::vector<S> inLo_, inHi_, cellWidth_;
+  std::vector<S> scale_;  // s_i
+  std::unordered_map<CellKey, Block<S>> blocks_;
+  std::unordered_map<CellKey, std::vector<Bernstein<S>>> roots_;
+  // Scratch.
+  std::vector<S> f_, jac_, tol_;
+};
+
+template <class S>
+CellKey Search<S>::blockKey(std::span<const std::int32_t> cell) const {
+  const int shift = grid_.depth - blockLevel_;
+  CellKey key = 0;
+  for (int j = 0; j < n_; ++j) key |= static_cast<CellKey>(cell[j] >> shift) << (blockLevel_ * j);
+  return key;
+}
+
+template <class S>
+const std::vector<Bernstein<S>>& Search<S>::rootFor(std::span<const std::int32_t> cell) {
+  // One polynomial per equation on the grid's domain, or per B-spline patch.
+  const int level = problem_.roots.empty() ? 0 : problem_.rootLevel;
+  std::vector<std::int32_t> patch(n_);
+  CellKey key = 0;
+  for (int j = 0; j < n_; ++j) {
+    patch[j] = cell[j] >> (grid_.depth - level);
+    key |= static_cast<CellKey>(patch[j]) << (level * j);
+  }
+  auto it = roots_.find(key);
+  if (it != roots_.end()) return it->second;
+  const Box<S> box =
+      level == 0 ? domain_ : cellBox<S>(Grid{n_, level, grid_.domain}, domain_, patch);
+  std::vector<Bernstein<S>> forms;
+  for (const Expression& e : system_.equations()) forms.push_back(e.template toBernstein<S>(box));
+  return roots_.emplace(key, std::move(forms)).first->second;
+}
+
+template <class S>
+const Block<S>& Search<S>::blockFor(std::span<const std::int32_t> cell) {
+  using std::abs;
+  using std::max;
+  using std::sqrt;
+  const CellKey key = blockKey(cell);
+  auto it = blocks_.find(key);
+  if (it != blocks_.end()) return it->second;
+  const int shift = grid_.depth - blockLevel_;
+  std::vector<std::int32_t> index(n_);
+  for (int j = 0; j < n_; ++j) index[j] = cell[j] >> shift;
+  const Box<S> box = cellBox<S>(Grid{n_, blockLevel_, grid_.domain}, domain_, index);
+  const std::vector<Bernstein<S>>& root = rootFor(cell);
+  const auto largest = [](const Bernstein<S>& p) {
+    S worst = 0;
+    for (const S& c : p.coefficients()) worst = max<S>(worst, abs(c));
+    return worst;
+  };
+  Block<S> block;
+  block.lipschitz.assign(m_, S(0));
+  block.slope.assign(std::size_t(m_) * n_, S(0));
+  for (int i = 0; i < m_; ++i) {
+    block.forms.push_back(root[i].restrict(box));
+    S frobenius = 0;
+    for (int j = 0; j < n_; ++j) {
+      const Bernstein<S> dj = block.forms[i].derivative(j);
+      block.slope[std::size_t(i) * n_ + j] = largest(dj);
+      // The Hessian entries bounded by their Bernstein coefficients (off-diagonal ones twice).
+      for (int k = j; k < n_; ++k) {
+        const S h = largest(dj.derivative(k));
+        frobenius += (k == j ? S(1) : S(2)) * h * h;
+      }
+    }
+    block.lipschitz[i] = sqrt(frobenius);
+  }
+  return blocks_.emplace(key, std::move(block)).first->second;
+}
+
+template <class S>
+bool Search<S>::excluded(std::span<const std::int32_t> cell, SingularSearch& out) {
+  using std::abs;
+  using std::sqrt;
+  const Box<S> box = cellBox<S>(grid_, domain_, cell);
+  std::vector<S> centre(n_);
+  S radius2 = 0;
+  for (int j = 0; j < n_; ++j) {
+    centre[j] = (box.lo[j] + box.hi[j]) / 2;
+    const S half = (box.hi[j] - box.lo[j]) / 2;
+    radius2 += half * half;
+  }
+  const S radius = sqrt(radius2);
+  system_.evaluate(centre, f_, jac_);
+  // The row scaling D at the centre; the gradient scales s_i.
+  std::vector<S> d(m_);
+  Matrix<S> a(m_, n_);
+  for (int i = 0; i < m_; ++i) {
+    S norm2 = 0;
+    for (int j = 0; j < n_; ++j)
+      norm2 += jac_[std::size_t(i) * n_ + j] * jac_[std::size_t(i) * n_ + j];
+    const S norm = sqrt(norm2);
+    if (isFinite(norm) && norm > scale_[i]) scale_[i] = norm;
+    d[i] = norm > 0 && isFinite(norm) ? S(1 / norm) : S(1);
+    for (int j = 0; j < n_; ++j) a(i, j) = d[i] * jac_[std::size_t(i) * n_ + j];
+  }
+  const S relative = S(1e-8), absolute = S(1e3) * eps_;
+  const Block<S>& block = blockFor(cell);
+
+  // Test 1 (Weyl): ||D (J(x) - J(c))||_2 <= |x - c| ||D L|| on the cell.
+  const auto [sigmaMin, sigmaMax] = sigmaRange<S>(a);
+  S lip2 = 0;
+  for (int i = 0; i < m_; ++i) lip2 += d[i] * d[i] * block.lipschitz[i] * block.lipschitz[i];
+  if (isFinite(sigmaMin) && sigmaMin > sqrt(lip2) * radius * (1 + relative) + absolute * sigmaMax) {
+    ++out.excludedByLipschitz;
+    return true;
+  }
+
+  // Test 2 (Weyl): J(x) in [A - R, A + R] entrywise, from the Bernstein form on the cell.
+  Matrix<S> mid(m_, n_), rad(m_, n_);
+  S slope2 = 0;
+  for (int i = 0; i < m_; ++i) {
+    const Bernstein<S> form = block.forms[i].restrict(box);
+    for (int j = 0; j < n_; ++j) {
+      const auto [lo, hi] = form.derivative(j).coefficientRange();
+      const S slope = block.slope[std::size_t(i) * n_ + j];
+      // m = 1: a partial derivative of one strict sign on the cell proves grad F != 0.
+      if (m_ == 1 && (lo > absolute * slope || hi < -absolute * slope)) {
+        ++out.excludedByEnclosure;
+        return true;
+      }
+      mid(i, j) = d[i] * (lo + hi) / 2;
+      rad(i, j) = d[i] * (hi - lo) / 2;
+      slope2 += d[i] * d[i] * slope * slope;
+    }
+  }
+  const S midMin = sigmaRange<S>(mid).first;
+  if (isFinite(midMin) && midMin > rad.norm() * (1 + relative) + absolute * sqrt(slope2)) {
+    ++out.excludedByEnclosure;
+    return true;
+  }
+  return false;
+}
+
+template <class S>
+S Search<S>::score(std::size_t c) {
+  // sigma_min(^J) at the projected point, or at the centre when Newton failed.
+  std::vector<S> x(n_);
+  if (projections_.converged[c]) {
+    const auto p = projections_.at(c);
+    std::copy(p.begin(), p.end(), x.begin());
+  } else {
+    const Box<S> box = cellBox<S>(grid_, domain_, cells_.cell(c));
+    for (int j = 0; j < n_; ++j) x[j] = (box.lo[j] + box.hi[j]) / 2;
+  }
+  system_.evaluate(x, f_, jac_);
+  Matrix<S> a(m_, n_);
+  for (int i = 0; i < m_; ++i)
+    for (int j = 0; j < n_; ++j) a(i, j) = jac_[std::size_t(i) * n_ + j] / scale_[i];
+  const S s = sigmaRange<S>(a).first;
+  return isFinite(s) ? s : S(1e300);
+}
+
+template <class S>
+bool Search<S>::residual(const std::vector<S>& x, const Vector<S>& v, Vector<S>& g,
+                         Matrix<S>& jhat) {
+  system_.evaluate(x, f_, jac_);
+  for (int i = 0; i < m_; ++i) {
+    g(i) = f_[i] / scale_[i];
+    for (int j = 0; j < n_; ++j) jhat(i, j) = jac_[std::size_t(i) * n_ + j] / scale_[i];
+  }
+  g.segment(m_, n_) = jhat.transpose() * v;
+  g(m_ + n_) = (v.squaredNorm() - 1) / 2;
+  for (int r = 0; r < g.size(); ++r)
+    if (!isFinite(g(r))) return false;
+  return true;
+}
+
+template <class S>
+bool Search<S>::locate(std::span<const S> start, Located<S>& result) {
+  using std::abs;
+  using std::cbrt;
+  using std::max;
+  const int unknowns = n_ + m_, rows = m_ + n_ + 1;
+  std::vector<S> x(start.begin(), start.end()), trial(n_), shifted(n_);
+  Vector<S> v(m_), g(rows), gTrial(rows), step(unknowns), vTrial(m_);
+  Matrix<S> jhat(m_, n_), jhatTrial(m_, n_), jg(rows, unknowns), hessian(n_, n_);
+
+  // v: the left singular vector of the smallest singular value of ^J at the start.
+  system_.evaluate(x, f_, jac_);
+  for (int i = 0; i < m_; ++i)
+    for (int j = 0; j < n_; ++j) jhat(i, j) = jac_[std::size_t(i) * n_ + j] / scale_[i];
+  if (m_ == 1) {
+    v(0) = 1;
+  } else {
+    Eigen::JacobiSVD<Matrix<S>> svd(jhat, Eigen::ComputeFullU);
+    v = svd.matrixU().col(m_ - 1);
+  }
+  if (!residual(x, v, g, jhat)) return false;
+  S norm = g.norm();
+  S start0 = 0;
+  for (const S& c : x) start0 = max<S>(start0, abs(c));
+  const S divergence = S(1e4) * (1 + start0);
+  std::vector<S> delta(n_);
+  for (int j = 0; j < n_; ++j) delta[j] = cbrt(eps_) * (domain_.hi[j] - domain_.lo[j]);
+  Eigen::CompleteOrthogonalDecomposition<Matrix<S>> cod(rows, unknowns);
+  cod.setThreshold(S(8 * rows) * eps_);
+
+  int slow = 0;
+  for (int it = 0; it < maxIterations_ && norm > 0; ++it) {
+    // The Jacobian of the augmented system; the Hessian of v^T F(x)/s by central differences.
+    for (int a = 0; a < n_; ++a) {
+      shifted = x;
+      shifted[a] = x[a] + delta[a];
+      if (!residual(shifted, v, gTrial, jhatTrial)) return false;
+      const Vector<S> up = gTrial.segment(m_, n_);
+      shifted[a] = x[a] - delta[a];
+      if (!residual(shifted, v, gTrial, jhatTrial)) return false;
+      const S h = (x[a] + delta[a]) - (x[a] - delta[a]);
+      hessian.col(a) = (up - gTrial.segment(m_, n_)) / h;
+    }
+    jg.setZero();
+    jg.topLeftCorner(m_, n_) = jhat;
+    jg.block(m_, 0, n_, n_) = (hessian + hessian.transpose()) / 2;
+    jg.block(m_, n_, n_, m_) = jhat.transpose();
+    jg.block(m_ + n_, n_, 1, m_) = v.transpose();
+    cod.compute(jg);
+    step = -cod.solve(g);
+
+    // Backtracking on |G|: the full Gauss-Newton step, else halves of it.
+    bool decreased = false;
+    S t = 1, trialNorm = 0;
+    for (int halving = 0; halving < 12 && !decreased; ++halving, t /= 2) {
+      for (int j = 0; j < n_; ++j) trial[j] = x[j] + t * step(j);
+      vTrial = v + t * step.tail(m_);
+      if (!residual(trial, vTrial, gTrial, jhatTrial)) continue;
+      trialNorm = gTrial.norm();
+      decreased = trialNorm < norm;
+      if (decreased) break;
+    }
+    if (!decreased) break;  // at the rounding floor (or a local minimum of |G|)
+    S moved = 0, size = 0;
+    for (int j = 0; j < n_; ++j) {
+      moved = max<S>(moved, abs(trial[j] - x[j]));
+      size = max<S>(size, abs(trial[j]));
+    }
+    slow = trialNorm > S(0.99) * norm ? slow + 1 : 0;
+    std::swap(x, trial);
+    v = vTrial;
+    std::swap(g, gTrial);
+    std::swap(jhat, jhatTrial);
+    norm = trialNorm;
+    if (!(size <= divergence)) return false;
+    if (moved <= S(16) * eps_ * (1 + size) || slow >= 3) break;
+  }
+  return accept(x, result);
+}
+
+template <class S>
+bool Search<S>::accept(const std::vector<S>& x, Located<S>& result) {
+  using std::abs;
+  using std::sqrt;
+  for (int j = 0; j < n_; ++j)
+    if (!(x[j] >= inLo_[j] && x[j] <= inHi_[j])) return false;
+  system_.evaluate(x, f_, jac_);
+  newton_.residualTolerance(x, tol_);
+  const S d = S(64) * eps_ * width_;
+  Matrix<S> j(m_, n_), jhat(m_, n_);
+  for (int i = 0; i < m_; ++i) {
+    S norm2 = 0;
+    for (int k = 0; k < n_; ++k) {
+      j(i, k) = jac_[std::size_t(i) * n_ + k];
+      jhat(i, k) = j(i, k) / scale_[i];
+      norm2 += j(i, k) * j(i, k);
+    }
+    // Within rounding of the domain size of a zero of F_i.
+    const S allowed = S(64) * tol_[i] + d * sqrt(norm2) + d * d * scale_[i] / width_;
+    if (!(abs(f_[i]) <= allowed)) return false;
+  }
+  const S tau = S(1e-6) * sqrt(eps_ / S(0x1p-52));
+  result.scaledSigma = sigmaRange<S>(jhat).first;
+  if (!(result.scaledSigma <= tau)) return false;
+  result.sigma = sigmaRange<S>(j).first;
+  result.x = x;
+  return true;
+}
+
+template <class S>
+SingularSearch Search<S>::run() {
+  SingularSearch out;
+  const std::size_t count = cells_.size();
+  out.cells = static_cast<std::int64_t>(count);
+  if (count == 0 || m_ == 0) return out;
+
+  // Step 1: candidate cells, where rank deficiency cannot be excluded.
+  std::vector<std::int32_t> candidates;
+  std::vector<std::int32_t> position(count, -1);
+  for (std::size_t c = 0; c < count; ++c) {
+    if (excluded(cells_.cell(c), out)) continue;
+    position[c] = static_cast<std::int32_t>(candidates.size());
+    candidates.push_back(static_cast<std::int32_t>(c));
+  }
+  out.candidates = static_cast<std::int64_t>(candidates.size());
+  if (candidates.empty()) return out;
+  for (S& s : scale_)
+    if (!(s > 0)) s = 1;
+
+  // Step 2: clusters of face-adjacent candidates within one block (union-find).
+  std::vector<std::int32_t> parent(candidates.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto find = [&](std::int32_t a) {
+    while (parent[a] != a) a = parent[a] = parent[parent[a]];
+    return a;
+  };
+  for (std::size_t a = 0; a < candidates.size(); ++a) {
+    const std::size_t c = static_cast<std::size_t>(candidates[a]);
+    const CellKey key = blockKey(cells_.cell(c));
+    for (int axis = 0; axis < n_; ++axis) {
+      const std::int32_t nb = cells_.neighbour(c, axis, +1);
+      if (nb < 0 || position[nb] < 0 || blockKey(cells_.cell(nb)) != key) continue;
+      parent[find(static_cast<std::int32_t>(a))] = find(position[nb]);
+    }
+  }
+  std::vector<S> scores(candidates.size());
+  for (std::size_t a = 0; a < candidates.size(); ++a) scores[a] = score(candidates[a]);
+  std::unordered_map<std::int32_t, std::vector<std::int32_t>> members;
+  for (std::size_t a = 0; a < candidates.size(); ++a)
+    members[find(static_cast<std::int32_t>(a))].push_back(static_cast<std::int32_t>(a));
+  std::vector<std::vector<std::int32_t>> clusters;
+  for (auto& [root, list] : members) {
+    std::sort(list.begin(), list.end(), [&](std::int32_t p, std::int32_t q) {
+      return scores[p] < scores[q] || (!(scores[q] < scores[p]) && p < q);
+    });
+    clusters.push_back(std::move(list));
+  }
+  std::sort(clusters.begin(), clusters.end(), [&](const auto& p, const auto& q) {
+    return scores[p[0]] < scores[q[0]] || (!(scores[q[0]] < scores[p[0]]) && p[0] < q[0]);
+  });
+  out.clusters = static_cast<std::int64_t>(clusters.size());
+
+  // Step 3: Gauss-Newton from the best cells of each cluster; merge duplicates.
+  std::vector<Located<S>> found;
+  const auto sameAs = [&](const Located<S>& p, const Located<S>& q) {
+    using std::abs;
+    for (int j = 0; j < n_; ++j)
+      if (!(abs(p.x[j] - q.x[j]) < cellWidth_[j])) return false;
+    return true;
+  };
+  for (const auto& cluster : clusters) {
+    if (out.attempts >= options_.maxAttempts) break;
+    if (static_cast<int>(found.size()) >= options_.maxPoints) break;
+    // The cluster's cells grown by one cell: where its point must lie.
+    std::vector<std::int32_t> lo(n_, grid_.cellsPerAxis()), hi(n_, -1);
+    for (std::int32_t a : cluster) {
+      const auto cell = cells_.cell(candidates[a]);
+      for (int j = 0; j < n_; ++j) {
+        lo[j] = std::min(lo[j], cell[j] - 1);
+        hi[j] = std::max(hi[j], cell[j] + 2);
+      }
+    }
+    const int tries = std::min<int>(options_.seedsPerCluster, static_cast<int>(cluster.size()));
+    for (int s = 0; s < tries && out.attempts < options_.maxAttempts; ++s) {
+      const std::size_t c = static_cast<std::size_t>(candidates[cluster[s]]);
+      std::vector<S> seed(n_);
+      if (projections_.converged[c]) {
+        const auto p = projections_.at(c);
+        std::copy(p.begin(), p.end(), seed.begin());
+      } else {
+        const Box<S> box = cellBox<S>(grid_, domain_, cells_.cell(c));
+        for (int j = 0; j < n_; ++j) seed[j] = (box.lo[j] + box.hi[j]) / 2;
+      }
+      ++out.attempts;
+      Located<S> point;
+      if (!locate(seed, point)) continue;
+      bool near = true;
+      for (int j = 0; j < n_ && near; ++j) {
+        near = point.x[j] >= domain_.lo[j] + cellWidth_[j] * S(double(lo[j])) &&
+               point.x[j] <= domain_.lo[j] + cellWidth_[j] * S(double(hi[j]));
+      }
+      if (!near) continue;
+      ++out.accepted;
+      auto same = std::find_if(found.begin(), found.end(),
+                               [&](const Located<S>& q) { return sameAs(point, q); });
+      if (same == found.end()) {
+        found.push_back(std::move(point));
+      } else if (point.scaledSigma < same->scaledSigma) {
+        *same = std::move(point);
+      }
+      break;  // one point per cluster
+    }
+  }
+
+  for (const Located<S>& p : found) {
+    SingularPoint sp;
+    for (const S& v : p.x) sp.point.push_back(toDouble(v));
+    sp.sigmaMin = toDouble(p.sigma);
+    out.points.push_back(std::move(sp));
+  }
+  std::sort(out.points.begin(), out.points.end(),
+            [](const SingularPoint& p, const SingularPoint& q) { return p.point < q.point; });
+  return out;
+}
+
+}  // namespace
+
+template <class S>
+SingularSearch findSingularPoints(const Problem& problem, const System<S>& system,
+                                  const SolutionCells& cells, const Projections<S>& projections,
+                                  const Box<S>& domain, const SingularOptions& options) {
+  return Search<S>(problem, system, cells, projections, domain, options).run();
+}
+
+template SingularSearch findSingularPoints(const Problem&, const System<double>&,
+                                           const SolutionCells&, const Projections<double>&,
+                                           const Box<double>&, const SingularOptions&);
+template SingularSearch findSingularPoints(const Problem&, const System<Mpfr>&,
+                                           const SolutionCells&, const Projections<Mpfr>&,
+                                           const Box<Mpfr>&, const SingularOptions&);
+
+template <class S>
+std::int64_t joinAtSingularPoints(Complex<S>& complex, const std::vector<SingularPoint>& points,
+                                  const Grid& grid) {
+  const int n = complex.n;
+  std::int64_t moved = 0;
+  std::vector<std::size_t> near;
+  for (const SingularPoint& p : points) {
+    // The vertices within one cell of the point, and the nearest of them.
+    near.clear();
+    std::size_t nearest = 0;
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t v = 0; v < complex.vertexCount(); ++v) {
+      const auto x = complex.vertex(v);
+      bool inside = true;
+      double d2 = 0;
+      for (int j = 0; j < n && inside; ++j) {
+        const double d = toDouble(x[j]) - p.point[j];
+        inside = std::abs(d) <= grid.cellWidth(j) * (1 + 1e-9);
+        d2 += d * d;
+      }
+      if (!inside) continue;
+      near.push_back(v);
+      if (d2 < best) best = d2, nearest = v;
+    }
+    if (near.size() < 2) continue;
+    const std::vector<S> target(complex.vertex(nearest).begin(), complex.vertex(nearest).end());
+    for (std::size_t v : near) {
+      if (v == nearest) continue;
+      std::copy(target.begin(), target.end(), complex.vertices.begin() + v * n);
+      ++moved;
+    }
+  }
+  return moved;
+}
+
+template std::int64_t joinAtSingularPoints(Complex<double>&, const std::vector<SingularPoint>&,
+                                           const Grid&);
+template std::int64_t joinAtSingularPoints(Complex<Mpfr>&, const std::vector<SingularPoint>&,
+                                           const Grid&);
+
+}  // namespace ndc
