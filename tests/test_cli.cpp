@@ -124,7 +124,9 @@ TEST_CASE("cli: --help and --version", "[cli]") {
        {"--depth", "--tolerance", "--bounding", "--subdivision", "--scalar", "--precision",
         "--classification", "--connection", "--jitter", "--out", "--json"})
     CHECK(contains(solveHelp.out, flag));
-  CHECK(contains(solveHelp.out, "paper|naive|crossing"));
+  // The strategy help comes from the registries: models, the default, parameters.
+  CHECK(contains(solveHelp.out, "paper, naive, crossing (default)"));
+  CHECK(contains(solveHelp.out, "paper:extra_layers=VALUE"));
 
   const Run version = ndcontour("--version");
   CHECK(version.status == 0);
@@ -237,6 +239,19 @@ TEST_CASE("cli: usage errors exit 2 with one line", "[cli]") {
                 {"--connection", "'mc'", "paper, naive, crossing"});
   checkBadInput(ndcontour("solve " + valid + " --scalar float"),
                 {"--scalar", "'float'", "double, mpfr"});
+  // Strategy parameters: unknown keys, bad values and malformed specs.
+  checkBadInput(ndcontour("solve " + valid + " --connection paper:layers=2"),
+                {"--connection", "unknown parameter 'layers'", "extra_layers, thin_thick_normal"});
+  checkBadInput(ndcontour("solve " + valid + " --connection paper:extra_layers=9"),
+                {"--connection", "'9' is not an integer in 0..8"});
+  checkBadInput(ndcontour("solve " + valid + " --connection paper:extra_layers=1,extra_layers=2"),
+                {"--connection", "given twice"});
+  checkBadInput(ndcontour("solve " + valid + " --connection 'paper:'"),
+                {"--connection", "no parameter after ':'"});
+  checkBadInput(ndcontour("solve " + valid + " --connection naive:x=1"),
+                {"--connection", "unknown parameter 'x'", "it has none"});
+  checkBadInput(ndcontour("solve " + valid + " --connection crossing:max_face_depth"),
+                {"--connection", "'max_face_depth' is not KEY=VALUE"});
 
   // Ranges and conversions.
   checkBadInput(ndcontour("solve " + valid + " --depth 0"), {"--depth", "1..30"});
@@ -300,6 +315,15 @@ TEST_CASE("cli: a valid solve runs the pipeline and writes its outputs", "[cli]"
   CHECK(contains(tolerance.out, "\"tolerance\": 0.0001"));
   const Run plain = ndcontour("solve " + valid + " --depth 3 --json");
   CHECK(contains(plain.out, "\"tolerance\": null"));
+  // Strategy parameters: the summary names the strategy and records every value used.
+  CHECK(contains(plain.out, "\"connection\": {\"max_face_depth\": 20}"));
+  const Run parameters =
+      ndcontour("solve " + valid + " --depth 3 --connection paper:extra_layers=1 --json");
+  INFO(parameters.err);
+  CHECK(parameters.status == 0);
+  CHECK(contains(parameters.out, "\"connection\": \"paper\""));
+  CHECK(contains(parameters.out,
+                 "\"connection\": {\"extra_layers\": 1, \"thin_thick_normal\": true}"));
   checkBadInput(ndcontour("solve " + valid + " --tolerance 0.1 --connection paper"),
                 {"--tolerance", "crossing"});
   // Not reachable above --max-depth: a warning, the run itself succeeds.

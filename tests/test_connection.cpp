@@ -330,8 +330,16 @@ TEST_CASE("createConnection names and errors", "[connection]") {
   CHECK(std::holds_alternative<NaiveConnection>(createConnection("naive")));
   CHECK(std::holds_alternative<CrossingConnection>(createConnection("crossing")));
   CHECK_THROWS_WITH(createConnection("x"),
-                    "unknown connection 'x' (expected paper, naive or crossing)");
-  CHECK(kConnectionNames.size() == 3);
+                    "unknown connection strategy 'x' (known: paper, naive, crossing)");
+  CHECK(connectionRegistry().names() == std::vector<std::string>{"paper", "naive", "crossing"});
+  // Parameters reach the model.
+  const Connection paper = createConnection("paper:extra_layers=2,thin_thick_normal=false");
+  REQUIRE(std::holds_alternative<PaperConnection>(paper));
+  CHECK(std::get<PaperConnection>(paper).options().extraLayers == 2);
+  CHECK_FALSE(std::get<PaperConnection>(paper).options().thinThickNormal);
+  CHECK(std::get<CrossingConnection>(createConnection("crossing:max_face_depth=16")).maxFaceDepth ==
+        16);
+  CHECK(std::get<CrossingConnection>(createConnection("crossing")).maxFaceDepth == 20);
 }
 //! [connection-names]
 

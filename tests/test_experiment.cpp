@@ -190,11 +190,16 @@ TEST_CASE("experiment: bad configs exit 2 with one line naming file, line and co
        "5:14:", "depths = 31 is out of range"},
       {"strategy",
        "id = \"strategy\"\n" + head + circle + "depths = [3]\nbounding = [\"taylor\"]\n", "6:13:",
-       "bounding: unknown bounding strategy 'taylor' (accepted: bernstein, interval, "
+       "bounding: unknown bounding strategy 'taylor' (known: bernstein, interval, "
        "linearized)"},
       {"connection",
        "id = \"connection\"\n" + head + circle + "depths = [3]\nconnection = \"mc\"\n",
        "6:14:", "unknown connection strategy 'mc'"},
+      {"parameter",
+       "id = \"parameter\"\n" + head + circle + "depths = [3]\nconnection = \"paper:layers=2\"\n",
+       "6:14:",
+       "connection strategy 'paper:layers=2': unknown parameter 'layers' (known: extra_layers, "
+       "thin_thick_normal)"},
       {"artefact",
        "id = \"artefact\"\nartefact = \"movie\"\ndescription = \"d\"\n" + circle + "depths = [3]\n",
        "2:12:", "unknown artefact 'movie'"},
@@ -329,6 +334,41 @@ TEST_CASE("experiment: a tiny grid writes the combined CSV, one row per run in g
   REQUIRE(quickRecords.size() == 2);
   for (const auto& r : quickRecords) CHECK(r.at("depth") == "2");
   CHECK(contains(slurp(out / "tiny" / "provenance.json"), "\"quick\": true"));
+}
+
+TEST_CASE("experiment: strategy parameters in a config reach the runs and their summaries",
+          "[experiment]") {
+  const std::string text =
+      "id = \"params\"\nartefact = \"table\"\ndescription = \"d\"\n"
+      "problems = [\"" +
+      example("circle") +
+      "\"]\ndepths = [3]\n"
+      "connection = [\"paper\", \"paper:extra_layers=1\", "
+      "\"crossing:max_face_depth=16\"]\n";
+  const fs::path config = writeConfig("params", text);
+  const fs::path out = scratch() / "params-out";
+  fs::remove_all(out);
+  const Run run = experiment(config, out, "--jobs 1");
+  INFO("stdout: " << run.out << "stderr: " << run.err);
+  REQUIRE(run.status == 0);
+  const auto records = csvRecords(out / "params" / "params.csv");
+  REQUIRE(records.size() == 3);
+  const std::vector<std::pair<std::string, std::string>> expected = {
+      {"paper", "\"connection\": {\"extra_layers\": 0, \"thin_thick_normal\": true}"},
+      {"paper:extra_layers=1",
+       "\"connection\": {\"extra_layers\": 1, \"thin_thick_normal\": true}"},
+      {"crossing:max_face_depth=16", "\"connection\": {\"max_face_depth\": 16}"}};
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    INFO(records[i].at("run"));
+    CHECK(records[i].at("connection") == expected[i].first);
+    CHECK(records[i].at("status") == "ok");
+    // Run ids stay plain folder names: ':' and ',' become '+', '=' becomes '-'.
+    CHECK(records[i].at("run").find_first_of(":=,") == std::string::npos);
+    const std::string summary =
+        slurp(out / "params" / "runs" / records[i].at("run") / "summary.json");
+    CHECK(contains(summary, expected[i].second));
+  }
+  CHECK(contains(records[1].at("run"), ".paper+extra_layers-1."));
 }
 
 TEST_CASE("experiment: the comparison with [expect] is recorded per run", "[experiment]") {

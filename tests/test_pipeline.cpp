@@ -13,6 +13,9 @@
 #include "framework/applications/load.hpp"
 #include "framework/core/problem.hpp"
 #include "framework/pipeline/pipeline.hpp"
+#include "strategies/bounding/bounding.hpp"
+#include "strategies/connection/connection.hpp"
+#include "strategies/subdivision/subdivision.hpp"
 #include "tests/test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -43,9 +46,9 @@ TEST_CASE("pipeline: every strategy combination runs on every example problem",
   REQUIRE(files.size() >= 8);
   for (const auto& file : files) {
     const ndc::Problem problem = ndc::loadProblem(file);
-    for (const char* bounding : {"bernstein", "interval", "linearized"}) {
-      for (const char* subdivision : {"uniform", "binary"}) {
-        for (const char* connection : {"paper", "naive", "crossing"}) {
+    for (const std::string& bounding : ndc::boundingRegistry().names()) {
+      for (const std::string& subdivision : ndc::subdivisionRegistry().names()) {
+        for (const std::string& connection : ndc::connectionRegistry().names()) {
           ndc::Settings settings;
           // Small depths: this checks that every combination runs end to end and that its
           // counts are consistent, not the quality of the result.
@@ -73,7 +76,7 @@ TEMPLATE_TEST_CASE("pipeline: cells add up and vertices lie on M", "[pipeline]",
   for (const char* name : {"circle", "circle-3d", "space-curve-r4", "circle-r5", "sphere",
                            "clifford-torus", "torus"}) {
     const ndc::Problem problem = example(name);
-    for (const char* connection : {"paper", "naive", "crossing"}) {
+    for (const std::string& connection : ndc::connectionRegistry().names()) {
       ndc::Settings settings;
       settings.depth = 4;
       settings.connection = connection;

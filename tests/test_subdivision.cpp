@@ -154,7 +154,7 @@ Manifold clifford() {
 
 //! [subdivide-by-name]
 template <class S>
-SolutionCells solve(const Problem& problem, const char* bounding, const char* subdivision,
+SolutionCells solve(const Problem& problem, std::string_view bounding, std::string_view subdivision,
                     int depth, const ndc::Progress& progress = {}) {
   const ndc::Box<S> domain = problem.domainAs<S>();
   const Grid grid{problem.n(), depth, problem.domain};
@@ -245,7 +245,7 @@ TEMPLATE_TEST_CASE("subdivision keeps every cell the manifold meets", "[subdivis
                    NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);
   for (const Case& c : cases<TestType>()) {
-    for (const char* bounding : {"bernstein", "interval", "linearized"}) {
+    for (const std::string& bounding : ndc::boundingRegistry().names()) {
       DYNAMIC_SECTION(c.manifold.name << " " << bounding) {
         const SolutionCells cells =
             solve<TestType>(c.manifold.problem, bounding, "binary", c.depth);
@@ -327,8 +327,8 @@ TEMPLATE_TEST_CASE("no zeros in the domain gives no solution cells", "[subdivisi
                                     {"x0^2 + x1^2 + x2^2 - 1", "x0 + x1 + x2 - 2.5"}),
                         "apart")};
   for (const Problem& p : problems) {
-    for (const char* bounding : {"bernstein", "interval", "linearized"}) {
-      for (const char* subdivision : {"uniform", "binary"}) {
+    for (const std::string& bounding : ndc::boundingRegistry().names()) {
+      for (const std::string& subdivision : ndc::subdivisionRegistry().names()) {
         DYNAMIC_SECTION(p.name << " " << bounding << " " << subdivision) {
           const SolutionCells cells = solve<TestType>(p, bounding, subdivision, 5);
           CHECK(cells.size() == 0);
@@ -380,7 +380,7 @@ TEST_CASE("double and mpfr give the same solution cells", "[subdivision][mpfr]")
   ndc::test::PrecisionScope<ndc::Mpfr> scope(128);
   for (const Case& c : {Case{circle2(), 7}, Case{torus(), 4}, Case{clifford(), 4}}) {
     for (const char* bounding : {"bernstein", "interval"}) {
-      for (const char* subdivision : {"uniform", "binary"}) {
+      for (const std::string& subdivision : ndc::subdivisionRegistry().names()) {
         DYNAMIC_SECTION(c.manifold.name << " " << bounding << " " << subdivision) {
           const SolutionCells d = solve<double>(c.manifold.problem, bounding, subdivision, c.depth);
           const SolutionCells m =
@@ -443,19 +443,20 @@ TEMPLATE_TEST_CASE("subdivision edge cases", "[subdivision]", NDC_SCALARS) {
 }
 
 //! [strategy-names]
-TEST_CASE("unknown strategy names are input errors", "[subdivision]") {
+TEST_CASE("unknown strategy names are usage errors", "[subdivision]") {
   const Manifold circle = circle2();
   const ndc::Box<double> domain = circle.problem.domainAs<double>();
   CHECK_THROWS_AS(ndc::createBounding<double>("bernstien", circle.problem, domain),
-                  ndc::InputError);
+                  ndc::UsageError);
   CHECK_THROWS_WITH(ndc::createBounding<double>("x", circle.problem, domain),
-                    "unknown bounding 'x' (expected bernstein, interval or linearized)");
-  CHECK_THROWS_AS(ndc::createSubdivision("octree"), ndc::InputError);
+                    "unknown bounding strategy 'x' (known: bernstein, interval, linearized)");
+  CHECK_THROWS_AS(ndc::createSubdivision("octree"), ndc::UsageError);
   CHECK_THROWS_WITH(ndc::createSubdivision("x"),
-                    "unknown subdivision 'x' (expected uniform or binary)");
-  for (std::string_view name : ndc::kBoundingNames)
+                    "unknown subdivision strategy 'x' (known: uniform, binary)");
+  for (const std::string& name : ndc::boundingRegistry().names())
     CHECK_NOTHROW(ndc::createBounding<double>(name, circle.problem, domain));
-  for (std::string_view name : ndc::kSubdivisionNames) CHECK_NOTHROW(ndc::createSubdivision(name));
+  for (const std::string& name : ndc::subdivisionRegistry().names())
+    CHECK_NOTHROW(ndc::createSubdivision(name));
   CHECK(std::holds_alternative<ndc::LinearizedBounding<double>>(
       ndc::createBounding<double>("linearized", circle.problem, domain)));
   CHECK(std::holds_alternative<ndc::UniformSubdivision>(ndc::createSubdivision("uniform")));
@@ -606,7 +607,7 @@ TEST_CASE("subdivision timings", "[.][subdivision-timing]") {
   // circle8 beyond depth 3 takes minutes: the per-equation hulls keep ~45000 cells at depth 3.
   for (const Timing& t :
        {Timing{torus(), 6}, Timing{clifford(), 6}, Timing{circle6(), 6}, Timing{circle8(), 3}}) {
-    for (const char* bounding : {"bernstein", "interval", "linearized"}) {
+    for (const std::string& bounding : ndc::boundingRegistry().names()) {
       for (const char* subdivision : {"binary", "uniform"}) {
         const auto start = std::chrono::steady_clock::now();
         const SolutionCells cells =

@@ -39,6 +39,7 @@
 #include "strategies/bounding/bounding.hpp"
 #include "strategies/classification/classification.hpp"
 #include "strategies/connection/connection.hpp"
+#include "strategies/projection/newton.hpp"
 #include "strategies/subdivision/subdivision.hpp"
 
 extern char** environ;
@@ -50,8 +51,14 @@ namespace {
 
 // --- Small helpers -------------------------------------------------------------------------
 
-/// Names of the projection strategies (solve has only Newton's; the list is for the grid).
-constexpr std::array<std::string_view, 1> kProjectionNames = {"newton"};
+/// A strategy spec as part of a run id (a folder name, also in LaTeX and gnuplot paths):
+/// `paper:extra_layers=1,thin_thick_normal=false` ->
+/// `paper+extra_layers-1+thin_thick_normal-false`.
+std::string idPart(std::string spec) {
+  for (char& c : spec) c = c == ':' || c == ',' ? '+' : c == '=' ? '-' : c;
+  return spec;
+}
+
 /// Values of `artefact`.
 constexpr std::array<std::string_view, 2> kArtefactNames = {"table", "figure"};
 /// Largest number of generator seeds, runs and timeout a config may ask for: bad input, not
@@ -279,6 +286,25 @@ class ConfigReader {
     return out;
   }
 
+  /// Strategy specs (`paper`, `paper:extra_layers=1`) of one family, checked by its registry.
+  template <class Factory>
+  std::vector<std::string> specs(const toml::node& node, const std::string& what,
+                                 const Registry<Factory>& registry) const {
+    const auto nodes = elements(node, what);
+    std::vector<std::string> out;
+    for (const toml::node* e : nodes) {
+      const std::string spec = stringOf(*e, what);
+      try {
+        registry.parse(spec);
+      } catch (const UsageError& error) {
+        fail(*e, what + ": " + error.what());
+      }
+      out.push_back(spec);
+    }
+    checkDistinct(out, nodes, what);
+    return out;
+  }
+
   template <class T>
   std::vector<T> integers(const toml::node& node, const std::string& what, std::int64_t lo,
                           std::int64_t hi) const {
@@ -300,16 +326,15 @@ class ConfigReader {
     GridFields g;
     if (const toml::node* n = t.get("problems")) g.problems = problemsOf(*n, prefix + "problems");
     if (const toml::node* n = t.get("bounding"))
-      g.bounding = names(*n, prefix + "bounding", kBoundingNames, "bounding strategy");
+      g.bounding = specs(*n, prefix + "bounding", boundingRegistry());
     if (const toml::node* n = t.get("subdivision"))
-      g.subdivision = names(*n, prefix + "subdivision", kSubdivisionNames, "subdivision strategy");
+      g.subdivision = specs(*n, prefix + "subdivision", subdivisionRegistry());
     if (const toml::node* n = t.get("projection"))
-      g.projection = names(*n, prefix + "projection", kProjectionNames, "projection strategy");
+      g.projection = specs(*n, prefix + "projection", projectionRegistry());
     if (const toml::node* n = t.get("classification"))
-      g.classification =
-          names(*n, prefix + "classification", kClassificationNames, "classification strategy");
+      g.classification = specs(*n, prefix + "classification", classificationRegistry());
     if (const toml::node* n = t.get("connection"))
-      g.connection = names(*n, prefix + "connection", kConnectionNames, "connection strategy");
+      g.connection = specs(*n, prefix + "connection", connectionRegistry());
     if (const toml::node* n = t.get("scalar"))
       g.scalar = names(*n, prefix + "scalar", kScalarNames, "scalar type");
     if (const toml::node* n = t.get("precision")) {
@@ -575,9 +600,10 @@ std::vector<ExperimentRun> experimentGrid(const ExperimentConfig& c) {
                       s.classification = classification;
                       s.connection = connection;
                       s.jitter = jitter;
-                      run.id = problem.name + ".L" + std::to_string(depth) + "." + bounding + "." +
-                               subdivision + "." + projection + "." + classification + "." +
-                               connection + "." + scalar + std::to_string(precision) +
+                      run.id = problem.name + ".L" + std::to_string(depth) + "." +
+                               idPart(bounding) + "." + idPart(subdivision) + "." +
+                               idPart(projection) + "." + idPart(classification) + "." +
+                               idPart(connection) + "." + scalar + std::to_string(precision) +
                                (jitter ? ".j" + std::to_string(*jitter) : "");
                       runs.push_back(std::move(run));
                     }

@@ -91,11 +91,12 @@ int run(int argc, char** argv) {
 int main(int argc, char** argv) {
   try {
     return run(argc, argv);
+  } catch (const ndc::UsageError& e) {
+    // Before InputError, of which it is one: a usage error names no file.
+    std::cerr << "ndcontour: " << oneLine(e.what()) << '\n';
+    return kExitBadInput;
   } catch (const ndc::InputError& e) {
     std::cerr << oneLine(e.what()) << '\n';
-    return kExitBadInput;
-  } catch (const ndc::cli::UsageError& e) {
-    std::cerr << "ndcontour: " << oneLine(e.what()) << '\n';
     return kExitBadInput;
   } catch (const std::exception& e) {
     std::cerr << "ndcontour: internal error: " << oneLine(e.what()) << '\n';

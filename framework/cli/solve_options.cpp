@@ -29,7 +29,7 @@ std::string joined(const std::array<std::string_view, N>& names) {
   return text;
 }
 
-/// Rejects a strategy name that is not among `names`, naming the accepted ones.
+/// Rejects a scalar name that is not among `names`, naming the accepted ones.
 template <std::size_t N>
 void checkName(const std::string& flag, const std::string& value,
                const std::array<std::string_view, N>& names, const std::string& family) {
@@ -37,6 +37,29 @@ void checkName(const std::string& flag, const std::string& value,
   std::string accepted;
   for (std::size_t i = 0; i < N; ++i) accepted += (i ? ", " : "") + std::string(names[i]);
   throw UsageError(flag + ": unknown " + family + " '" + value + "' (accepted: " + accepted + ")");
+}
+
+/// Rejects a strategy spec its family's registry does not accept, naming the flag.
+template <class Factory>
+void checkSpec(const std::string& flag, const std::string& spec,
+               const Registry<Factory>& registry) {
+  try {
+    registry.parse(spec);
+  } catch (const UsageError& error) {
+    throw UsageError(flag + ": " + error.what());
+  }
+}
+
+/// Declares `--FAMILY SPEC` with the registry's models and parameters as its help.
+template <class Factory>
+void addStrategyOption(CLI::App& app, const std::string& flag, std::string& spec,
+                       const Registry<Factory>& registry) {
+  std::string family = registry.family();
+  family[0] = static_cast<char>(family[0] - 'a' + 'A');
+  app.add_option(flag, spec,
+                 family + " strategy: " + registryHelp(registry.specs(), spec) +
+                     " (docs/adding-a-strategy.md)")
+      ->type_name("NAME[:KEY=VALUE,...]");
 }
 
 }  // namespace
@@ -73,12 +96,8 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
                       std::to_string(kDefaultRefinementLevels) +
                       ", or less where n * level > 64; equal to --depth: no refinement)")
       ->type_name("L");
-  solve.add_option("--bounding", s.bounding, "Bounding strategy")
-      ->type_name(joined(kBoundingNames))
-      ->capture_default_str();
-  solve.add_option("--subdivision", s.subdivision, "Subdivision strategy")
-      ->type_name(joined(kSubdivisionNames))
-      ->capture_default_str();
+  addStrategyOption(solve, "--bounding", s.bounding, boundingRegistry());
+  addStrategyOption(solve, "--subdivision", s.subdivision, subdivisionRegistry());
   solve.add_option("--scalar", s.scalar, "Scalar type of the whole run")
       ->type_name(joined(kScalarNames))
       ->capture_default_str();
@@ -87,12 +106,8 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
                   "Working precision in bits of --scalar mpfr (default " +
                       std::to_string(kDefaultMpfrPrecision) + ")")
       ->type_name("BITS");
-  solve.add_option("--classification", s.classification, "Classification strategy")
-      ->type_name(joined(kClassificationNames))
-      ->capture_default_str();
-  solve.add_option("--connection", s.connection, "Connection strategy")
-      ->type_name(joined(kConnectionNames))
-      ->capture_default_str();
+  addStrategyOption(solve, "--classification", s.classification, classificationRegistry());
+  addStrategyOption(solve, "--connection", s.connection, connectionRegistry());
   solve.add_option("--jitter", s.jitter, "Seed of a grid jitter (default: no jitter)")
       ->check(unsignedUpTo(std::numeric_limits<std::uint64_t>::max()))
       ->type_name("SEED");
@@ -123,10 +138,10 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
 
 void validateSolveOptions(SolveOptions& o) {
   Settings& s = o.settings;
-  checkName("--bounding", s.bounding, kBoundingNames, "bounding strategy");
-  checkName("--subdivision", s.subdivision, kSubdivisionNames, "subdivision strategy");
-  checkName("--classification", s.classification, kClassificationNames, "classification strategy");
-  checkName("--connection", s.connection, kConnectionNames, "connection strategy");
+  checkSpec("--bounding", s.bounding, boundingRegistry());
+  checkSpec("--subdivision", s.subdivision, subdivisionRegistry());
+  checkSpec("--classification", s.classification, classificationRegistry());
+  checkSpec("--connection", s.connection, connectionRegistry());
   checkName("--scalar", s.scalar, kScalarNames, "scalar type");
 
   if (s.depth < kMinDepth || s.depth > kMaxDepth)

@@ -37,10 +37,12 @@ struct CellBudgetExceeded : InputError {
   using InputError::InputError;
 };
 
-/// A bad command line or experiment option (unknown strategy or parameter, value out of range).
-class UsageError : public std::runtime_error {
+/// A bad command line, strategy spec or experiment option (unknown strategy or parameter, value
+/// out of range). It is bad input, so a library user who catches InputError catches it too;
+/// the CLI prints it as `ndcontour: what()`.
+class UsageError : public InputError {
  public:
-  explicit UsageError(const std::string& message) : std::runtime_error(message) {}
+  explicit UsageError(const std::string& message) : InputError(message) {}
 };
 
 /// `text` with every line break replaced by a space, so that a message stays on one line.

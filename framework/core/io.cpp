@@ -149,7 +149,10 @@ std::string toJson(const Summary& s) {
     << ", \"jitter\": " << (t.jitter ? std::to_string(*t.jitter) : "null")
     << ", \"max_depth\": " << s.topology.maxDepth
     << ", \"tolerance\": " << (t.tolerance > 0 ? number(t.tolerance) : std::string("null"))
-    << "},\n";
+    << ", \"parameters\": {";
+  for (std::size_t i = 0; i < s.parameters.size(); ++i)
+    o << (i ? ", " : "") << jsonQuoted(s.parameters[i].first) << ": " << s.parameters[i].second;
+  o << "}},\n";
   o << "  \"cells\": {\"visited\": " << s.visited << ", \"solution\": " << s.solution
     << ", \"normal\": " << s.normal << ", \"abnormal\": " << s.abnormal
     << ", \"failed\": " << s.failed << "},\n";

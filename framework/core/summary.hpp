@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ndc {
@@ -107,6 +108,9 @@ struct Summary {
   std::string problem;
   int n = 0, k = 0;
   Settings settings;
+  /// Per strategy family, in pipeline order: the parameter values the run used, as a JSON
+  /// object (`settings.parameters` in summary.json; `{}` for a model without parameters).
+  std::vector<std::pair<std::string, std::string>> parameters;
   std::int64_t visited = 0, solution = 0, normal = 0, abnormal = 0, failed = 0;
   MeshStats mesh;
   std::int64_t ambiguousCells = 0, singularCells = 0;

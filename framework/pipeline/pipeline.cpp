@@ -348,6 +348,18 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   summary.k = problem.k();
   summary.settings = settings;
   summary.settings.precisionBits = ScalarTraits<S>::precisionBits();
+  // summary.json names each strategy and lists its parameter values apart (contracts 4.3).
+  const StrategyChoices choices = parseStrategies(settings);
+  summary.settings.bounding = choices.bounding.name;
+  summary.settings.subdivision = choices.subdivision.name;
+  summary.settings.projection = choices.projection.name;
+  summary.settings.classification = choices.classification.name;
+  summary.settings.connection = choices.connection.name;
+  summary.parameters = {{"bounding", choices.bounding.parameters.json()},
+                        {"subdivision", choices.subdivision.parameters.json()},
+                        {"projection", choices.projection.parameters.json()},
+                        {"classification", choices.classification.parameters.json()},
+                        {"connection", choices.connection.parameters.json()}};
 
   // Choose every strategy by name before any work, so a bad name costs nothing.
   const Grid grid = makeGrid(problem, settings);
@@ -365,12 +377,12 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   // One bounding over the domain, or one per B-spline patch (built in subdividePatches).
   const std::optional<Bounding<S>> bounding =
       problem.roots.empty()
-          ? std::optional<Bounding<S>>(createBounding<S>(settings.bounding, problem, domain))
+          ? std::optional<Bounding<S>>(createBounding<S>(choices.bounding, problem, domain))
           : std::nullopt;
-  const Subdivision subdivision = createSubdivision(settings.subdivision);
-  const Projection<S> projection = createProjection<S>(settings.projection, system);
-  const Classification classification = createClassification(settings.classification);
-  const Connection connection = createConnection(settings.connection);
+  const Subdivision subdivision = createSubdivision(choices.subdivision);
+  const Projection<S> projection = createProjection<S>(choices.projection, system);
+  const Classification classification = createClassification(choices.classification);
+  const Connection connection = createConnection(choices.connection);
 
   // Alg. 1 (1): ZeroSetSubdiv at a depth, with a budget of solution cells.
   const auto subdivideAt = [&](const Grid& at, std::int64_t maxCells, const Progress& report) {
@@ -427,11 +439,11 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   ConnectionOutput<S> connected = connect<S>(connection, input);
   summary.tConnection = secondsSince(t);
   summary.topology = connected.topology;
-  if (settings.connection != "crossing") {
+  if (choices.connection.name != "crossing") {
     summary.topology.baseLevel = summary.topology.maxLevel = settings.depth;
     summary.topology.maxDepth = settings.depth;
     summary.topology.reason =
-        "the " + settings.connection + " connection does not certify topology (crossing does)";
+        "the " + choices.connection.name + " connection does not certify topology (crossing does)";
   }
   summary.ambiguousCells = connected.ambiguousCells;
   summary.singularCells = connected.singularCells;
@@ -501,6 +513,14 @@ int maxDepthOf(const Problem& problem, const Settings& settings) {
   return settings.maxDepth;
 }
 
+StrategyChoices parseStrategies(const Settings& settings) {
+  return {boundingRegistry().parse(settings.bounding),
+          subdivisionRegistry().parse(settings.subdivision),
+          projectionRegistry().parse(settings.projection),
+          classificationRegistry().parse(settings.classification),
+          connectionRegistry().parse(settings.connection)};
+}
+
 RunResult runPipeline(const Problem& problem, const Settings& settings, const Progress& progress) {
   if (settings.depth < 1 || !Grid::fits(problem.n(), settings.depth)) {
     throw InputError(problem.path + ": depth " + std::to_string(settings.depth) +
@@ -509,7 +529,9 @@ RunResult runPipeline(const Problem& problem, const Settings& settings, const Pr
   }
   maxDepthOf(problem, settings);  // refuses a bad --max-depth before any work
   // The default connection builds curves and surfaces only: refuse other k before any work.
-  if (settings.connection == "crossing" && problem.k() != 1 && problem.k() != 2) {
+  // Every strategy spec is checked before any work (UsageError on a bad name or parameter).
+  const StrategyChoices choices = parseStrategies(settings);
+  if (choices.connection.name == "crossing" && problem.k() != 1 && problem.k() != 2) {
     throw InputError(problem.path + ": the crossing connection supports k = 1 (curves) and k = 2 " +
                      "(surfaces); this problem has k = " + std::to_string(problem.k()) +
                      " (n - m); use --connection paper or naive for k >= 3");

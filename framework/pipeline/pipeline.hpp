@@ -12,6 +12,7 @@
 #include "framework/core/application.hpp"
 #include "framework/core/complex.hpp"
 #include "framework/core/problem.hpp"
+#include "framework/core/registry.hpp"
 #include "framework/core/result.hpp"
 #include "framework/core/strategy.hpp"
 #include "framework/core/summary.hpp"
@@ -19,13 +20,22 @@
 namespace ndc {
 
 /// Names accepted for the scalar type (`--scalar`, `scalar` in experiment configs); the strategy
-/// families' names are their own lists (kBoundingNames in strategies/bounding/bounding.hpp, ...).
+/// families' names are in their registries (boundingRegistry() and so on).
 inline constexpr std::array<std::string_view, 2> kScalarNames = {"double", "mpfr"};
 /// Accepted ranges of the numeric settings (`--depth`, `--precision`).
 inline constexpr int kMinDepth = 1, kMaxDepth = 30;
 inline constexpr unsigned kMinPrecision = 24, kMaxPrecision = 4096;
 /// Working precision of `--scalar mpfr` when `--precision` is not given.
 inline constexpr unsigned kDefaultMpfrPrecision = 128;
+
+/// The five strategy specs of a Settings (`paper:extra_layers=1`), parsed against the
+/// families' registries.
+struct StrategyChoices {
+  StrategyChoice bounding, subdivision, projection, classification, connection;
+};
+
+/// Parses the strategy specs of `settings`; UsageError on an unknown name, parameter or value.
+StrategyChoices parseStrategies(const Settings& settings);
 
 /// Runs the whole pipeline on a problem with the given settings. Strategy names are checked
 /// first (ndc::InputError on unknown names or a depth the grid cannot hold); the scalar is

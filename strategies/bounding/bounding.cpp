@@ -680,16 +680,43 @@ bool LinearizedBounding<S>::linearizationExcludes(const Box<S>& box) const {
 
 // --- Factory -------------------------------------------------------------------------------------
 
-//! [bounding-factory]
-template <class S>
-Bounding<S> createBounding(std::string_view name, const Problem& problem, const Box<S>& domain) {
-  if (name == kBoundingNames[0]) return Bounding<S>(std::in_place_index<0>, problem, domain);
-  if (name == kBoundingNames[1]) return Bounding<S>(std::in_place_index<1>, problem, domain);
-  if (name == kBoundingNames[2]) return Bounding<S>(std::in_place_index<2>, problem, domain);
-  throw InputError("unknown bounding '" + std::string(name) +
-                   "' (expected bernstein, interval or linearized)");
+//! [bounding-registry]
+Registry<BoundingFactory>& boundingRegistry() {
+  static Registry<BoundingFactory> registry(
+      "bounding",
+      {{{"bernstein",
+         "The convex hull of the Bernstein coefficients (Sec. 4): a box is discarded when one "
+         "equation's coefficients all have one sign.",
+         {}},
+        boundingFactory<BernsteinBounding>()},
+       {{"interval",
+         "Interval arithmetic on the expression, with a mean-value form: cheap per box, looser "
+         "than the Bernstein hull.",
+         {}},
+        boundingFactory<IntervalBounding>()},
+       {{"linearized",
+         "The Bernstein hull, then a linearization of all equations together that discards "
+         "boxes no single equation can (docs/subdivision.md).",
+         {}},
+        boundingFactory<LinearizedBounding>()}});
+  return registry;
 }
-//! [bounding-factory]
+//! [bounding-registry]
+
+template <class S>
+Bounding<S> createBounding(const StrategyChoice& choice, const Problem& problem,
+                           const Box<S>& domain) {
+  const BoundingFactory& factory = boundingRegistry().find(choice.name).create;
+  if constexpr (std::is_same_v<S, double>)
+    return factory.inDouble(problem, domain, choice.parameters);
+  else
+    return factory.inMpfr(problem, domain, choice.parameters);
+}
+
+template <class S>
+Bounding<S> createBounding(std::string_view spec, const Problem& problem, const Box<S>& domain) {
+  return createBounding<S>(boundingRegistry().parse(spec), problem, domain);
+}
 
 template class BernsteinBounding<double>;
 template class BernsteinBounding<Mpfr>;
@@ -697,6 +724,10 @@ template class IntervalBounding<double>;
 template class IntervalBounding<Mpfr>;
 template class LinearizedBounding<double>;
 template class LinearizedBounding<Mpfr>;
+template Bounding<double> createBounding<double>(const StrategyChoice&, const Problem&,
+                                                 const Box<double>&);
+template Bounding<Mpfr> createBounding<Mpfr>(const StrategyChoice&, const Problem&,
+                                             const Box<Mpfr>&);
 template Bounding<double> createBounding<double>(std::string_view, const Problem&,
                                                  const Box<double>&);
 template Bounding<Mpfr> createBounding<Mpfr>(std::string_view, const Problem&, const Box<Mpfr>&);

@@ -14,6 +14,7 @@
 #include "framework/core/expression.hpp"
 #include "framework/core/interval.hpp"
 #include "framework/core/problem.hpp"
+#include "framework/core/registry.hpp"
 #include "framework/core/scalar.hpp"
 #include "framework/core/strategy.hpp"
 
@@ -199,14 +200,37 @@ static_assert(BoundingStrategy<LinearizedBounding<Mpfr>>);
 template <class S>
 using Bounding = std::variant<BernsteinBounding<S>, IntervalBounding<S>, LinearizedBounding<S>>;
 
-/// Names accepted by createBounding, in the variant's order.
-inline constexpr std::array<std::string_view, 3> kBoundingNames{"bernstein", "interval",
-                                                                "linearized"};
+/// A bounding factory: the model for a problem on a domain (in either scalar) with the spec's
+/// parameter values. A bounding is called once per box in the subdivision's inner loop, so each
+/// model is an alternative of the variant (no virtual dispatch): a new model is one file, one
+/// alternative in Bounding and one registry line (docs/adding-a-strategy.md).
+struct BoundingFactory {
+  Bounding<double> (*inDouble)(const Problem&, const Box<double>&, const Parameters&);
+  Bounding<Mpfr> (*inMpfr)(const Problem&, const Box<Mpfr>&, const Parameters&);
+};
 
-/// The bounding strategy called `name` for `problem` on `domain` (the problem domain in S,
-/// jitter applied); throws InputError on an unknown name.
+/// The factory of model `B` (a class template over the scalar, built from problem and domain).
+template <template <class> class B>
+BoundingFactory boundingFactory() {
+  return {[](const Problem& p, const Box<double>& d, const Parameters&) {
+            return Bounding<double>(std::in_place_type<B<double>>, p, d);
+          },
+          [](const Problem& p, const Box<Mpfr>& d, const Parameters&) {
+            return Bounding<Mpfr>(std::in_place_type<B<Mpfr>>, p, d);
+          }};
+}
+
+/// The bounding family's registry (strategies/bounding/bounding.cpp; the CLI's `--bounding`).
+Registry<BoundingFactory>& boundingRegistry();
+
+/// The bounding strategy a parsed spec names, for `problem` on `domain` (the problem domain in
+/// S, jitter applied).
 template <class S>
-Bounding<S> createBounding(std::string_view name, const Problem& problem, const Box<S>& domain);
+Bounding<S> createBounding(const StrategyChoice& choice, const Problem& problem,
+                           const Box<S>& domain);
+/// The bounding strategy of a spec; UsageError on an unknown name, parameter or value.
+template <class S>
+Bounding<S> createBounding(std::string_view spec, const Problem& problem, const Box<S>& domain);
 
 extern template class BernsteinBounding<double>;
 extern template class BernsteinBounding<Mpfr>;
@@ -214,6 +238,10 @@ extern template class IntervalBounding<double>;
 extern template class IntervalBounding<Mpfr>;
 extern template class LinearizedBounding<double>;
 extern template class LinearizedBounding<Mpfr>;
+extern template Bounding<double> createBounding<double>(const StrategyChoice&, const Problem&,
+                                                        const Box<double>&);
+extern template Bounding<Mpfr> createBounding<Mpfr>(const StrategyChoice&, const Problem&,
+                                                    const Box<Mpfr>&);
 extern template Bounding<double> createBounding<double>(std::string_view, const Problem&,
                                                         const Box<double>&);
 extern template Bounding<Mpfr> createBounding<Mpfr>(std::string_view, const Problem&,

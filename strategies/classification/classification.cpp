@@ -6,16 +6,26 @@
 
 namespace ndc {
 
-//! [classification-factory]
-Classification createClassification(std::string_view name) {
-  if (name == "paper") return PaperClassification{};
-  std::string known;
-  for (std::string_view k : kClassificationNames) {
-    known += (known.empty() ? "" : ", ") + std::string(k);
-  }
-  throw InputError("unknown classification '" + std::string(name) + "' (known: " + known + ")");
+//! [classification-registry]
+Registry<ClassificationFactory>& classificationRegistry() {
+  static Registry<ClassificationFactory> registry(
+      "classification",
+      {{{"paper",
+         "Sec. 4.1: normal when Newton converged inside the closed cell, abnormal outside, "
+         "failed when it did not converge.",
+         {}},
+        [](const Parameters&) { return holdClassification(PaperClassification{}); }}});
+  return registry;
 }
-//! [classification-factory]
+//! [classification-registry]
+
+Classification createClassification(const StrategyChoice& choice) {
+  return classificationRegistry().find(choice.name).create(choice.parameters);
+}
+
+Classification createClassification(std::string_view spec) {
+  return createClassification(classificationRegistry().parse(spec));
+}
 
 template <class S>
 std::vector<CellClass> classifyCells(const Classification& classification,

@@ -4,10 +4,12 @@
 /// \ref connection for the rules and the choices made where the paper is vague.
 #pragma once
 
-#include <array>
+#include <memory>
 #include <string_view>
+#include <utility>
 #include <variant>
 
+#include "framework/core/registry.hpp"
 #include "framework/core/scalar.hpp"
 #include "framework/core/strategy.hpp"
 #include "strategies/connection/crossing.hpp"
@@ -83,16 +85,66 @@ static_assert(ConnectionStrategy<PaperConnection, Mpfr>);
 static_assert(ConnectionStrategy<NaiveConnection, double>);
 static_assert(ConnectionStrategy<NaiveConnection, Mpfr>);
 
-/// The connection family: one closed variant, dispatched once per stage.
-/// Models: PaperConnection, NaiveConnection, CrossingConnection
-/// (strategies/connection/crossing.hpp).
-using Connection = std::variant<PaperConnection, NaiveConnection, CrossingConnection>;
+/// A connection model that is none of the variant's own alternatives (a new strategy in one
+/// file, or a test-only one): one virtual call per stage, for both scalars.
+class DynamicConnection final {
+ public:
+  template <class T>
+  explicit DynamicConnection(T model) : model_(std::make_shared<Holder<T>>(std::move(model))) {}
 
-/// The names createConnection recognises (the CLI's `--connection`).
-inline constexpr std::array<std::string_view, 3> kConnectionNames{"paper", "naive", "crossing"};
+  template <class S>
+  ConnectionOutput<S> connect(const ConnectionInput<S>& input) const {
+    return model_->connect(input);
+  }
 
-/// Makes the connection called `name` (default options); throws InputError on an unknown name.
-Connection createConnection(std::string_view name);
+ private:
+  struct Model {
+    virtual ~Model() = default;
+    virtual ConnectionOutput<double> connect(const ConnectionInput<double>& input) const = 0;
+    virtual ConnectionOutput<Mpfr> connect(const ConnectionInput<Mpfr>& input) const = 0;
+  };
+  template <class T>
+  struct Holder final : Model {
+    explicit Holder(T m) : model(std::move(m)) {}
+    ConnectionOutput<double> connect(const ConnectionInput<double>& in) const override {
+      return model.connect(in);
+    }
+    ConnectionOutput<Mpfr> connect(const ConnectionInput<Mpfr>& in) const override {
+      return model.connect(in);
+    }
+    T model;
+  };
+  std::shared_ptr<const Model> model_;
+};
+
+/// The connection family: one variant, dispatched once per stage. Models: PaperConnection,
+/// NaiveConnection, CrossingConnection (strategies/connection/crossing.hpp), and any other
+/// registered model through DynamicConnection.
+using Connection =
+    std::variant<PaperConnection, NaiveConnection, CrossingConnection, DynamicConnection>;
+
+/// `model` as a Connection: its own alternative when it has one, else a DynamicConnection.
+template <class T>
+Connection holdConnection(T model) {
+  if constexpr (std::is_constructible_v<Connection, std::in_place_type_t<T>, T> &&
+                !std::is_same_v<T, DynamicConnection>)
+    return Connection(std::in_place_type<T>, std::move(model));
+  else
+    return Connection(std::in_place_type<DynamicConnection>, DynamicConnection(std::move(model)));
+}
+
+/// A connection factory: the model built with the spec's parameter values.
+using ConnectionFactory = Connection (*)(const Parameters& parameters);
+
+/// The connection family's registry (strategies/connection/connection.cpp lists the models;
+/// the CLI's `--connection`). Mutable so that tests can register test-only models.
+Registry<ConnectionFactory>& connectionRegistry();
+
+/// Makes the connection a parsed spec names, with its parameters.
+Connection createConnection(const StrategyChoice& choice);
+/// Makes the connection of a spec (`paper`, `paper:extra_layers=1`); UsageError on an unknown
+/// name, parameter or value.
+Connection createConnection(std::string_view spec);
 
 /// Runs the connection stage (one std::visit per stage).
 template <class S>

@@ -260,12 +260,36 @@ ProjectedPoint<S> NewtonProjection<S>::project(std::span<S> x) const {
 template class NewtonProjection<double>;
 template class NewtonProjection<Mpfr>;
 
+//! [projection-registry]
+Registry<ProjectionFactory>& projectionRegistry() {
+  static Registry<ProjectionFactory> registry(
+      "projection",
+      {{{"newton",
+         "Minimum-norm Newton-Raphson from the cell's centre (Sec. 4, Alg. 1), stopping at the "
+         "backward error of the run's scalar.",
+         {}},
+        {[](const System<double>& s, const Parameters&) {
+           return Projection<double>(NewtonProjection<double>(s));
+         },
+         [](const System<Mpfr>& s, const Parameters&) {
+           return Projection<Mpfr>(NewtonProjection<Mpfr>(s));
+         }}}});
+  return registry;
+}
+//! [projection-registry]
+
 template <class S>
-Projection<S> createProjection(std::string_view name, const System<S>& system) {
-  if (name == "newton") return NewtonProjection<S>(system);
-  std::string known;
-  for (std::string_view k : kProjectionNames) known += (known.empty() ? "" : ", ") + std::string(k);
-  throw InputError("unknown projection '" + std::string(name) + "' (known: " + known + ")");
+Projection<S> createProjection(const StrategyChoice& choice, const System<S>& system) {
+  const ProjectionFactory& factory = projectionRegistry().find(choice.name).create;
+  if constexpr (std::is_same_v<S, double>)
+    return factory.inDouble(system, choice.parameters);
+  else
+    return factory.inMpfr(system, choice.parameters);
+}
+
+template <class S>
+Projection<S> createProjection(std::string_view spec, const System<S>& system) {
+  return createProjection<S>(projectionRegistry().parse(spec), system);
 }
 
 template <class S>
@@ -309,6 +333,8 @@ Projector<S> makeProjector(const Projection<S>& projection) {
   };
 }
 
+template Projection<double> createProjection(const StrategyChoice&, const System<double>&);
+template Projection<Mpfr> createProjection(const StrategyChoice&, const System<Mpfr>&);
 template Projection<double> createProjection(std::string_view, const System<double>&);
 template Projection<Mpfr> createProjection(std::string_view, const System<Mpfr>&);
 template Projections<double> projectCells(const Projection<double>&, const SolutionCells&,

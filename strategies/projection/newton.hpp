@@ -15,6 +15,7 @@
 #include "framework/core/box.hpp"
 #include "framework/core/complex.hpp"
 #include "framework/core/grid.hpp"
+#include "framework/core/registry.hpp"
 #include "framework/core/scalar.hpp"
 #include "framework/core/strategy.hpp"
 #include "framework/core/system.hpp"
@@ -98,12 +99,24 @@ extern template class NewtonProjection<Mpfr>;
 template <class S>
 using Projection = std::variant<NewtonProjection<S>>;
 
-/// The names `createProjection` accepts (the CLI's `projection` setting).
-inline constexpr std::array<std::string_view, 1> kProjectionNames{"newton"};
+/// A projection factory: the model for a system (in either scalar) with the spec's parameter
+/// values. A new model is one file, one alternative in Projection and one registry line
+/// (docs/adding-a-strategy.md).
+struct ProjectionFactory {
+  Projection<double> (*inDouble)(const System<double>&, const Parameters&);
+  Projection<Mpfr> (*inMpfr)(const System<Mpfr>&, const Parameters&);
+};
 
-/// Makes the projection called `name` for `system`; throws InputError on an unknown name.
+/// The projection family's registry (strategies/projection/newton.cpp; `projection` in
+/// experiment configs).
+Registry<ProjectionFactory>& projectionRegistry();
+
+/// Makes the projection a parsed spec names, for `system`.
 template <class S>
-Projection<S> createProjection(std::string_view name, const System<S>& system);
+Projection<S> createProjection(const StrategyChoice& choice, const System<S>& system);
+/// Makes the projection of a spec; UsageError on an unknown name, parameter or value.
+template <class S>
+Projection<S> createProjection(std::string_view spec, const System<S>& system);
 
 /// Alg. 1, projection step for every solution cell: projects the centroid of each cell's
 /// closed box (cellBox on `domain`, the grid's domain in S) onto M. Reports progress as
@@ -117,6 +130,8 @@ Projections<S> projectCells(const Projection<S>& projection, const SolutionCells
 template <class S>
 Projector<S> makeProjector(const Projection<S>& projection);
 
+extern template Projection<double> createProjection(const StrategyChoice&, const System<double>&);
+extern template Projection<Mpfr> createProjection(const StrategyChoice&, const System<Mpfr>&);
 extern template Projection<double> createProjection(std::string_view, const System<double>&);
 extern template Projection<Mpfr> createProjection(std::string_view, const System<Mpfr>&);
 extern template Projections<double> projectCells(const Projection<double>&, const SolutionCells&,

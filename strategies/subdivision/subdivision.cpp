@@ -8,13 +8,27 @@
 
 namespace ndc {
 
-//! [subdivision-factory]
-Subdivision createSubdivision(std::string_view name) {
-  if (name == kSubdivisionNames[0]) return UniformSubdivision{};
-  if (name == kSubdivisionNames[1]) return BinarySubdivision{};
-  throw InputError("unknown subdivision '" + std::string(name) + "' (expected uniform or binary)");
+//! [subdivision-registry]
+Registry<SubdivisionFactory>& subdivisionRegistry() {
+  static Registry<SubdivisionFactory> registry(
+      "subdivision",
+      {{{"uniform",
+         "As in the paper: 2^n children per level, a box is bounded after every n halvings.",
+         {}},
+        [](const Parameters&) { return Subdivision(UniformSubdivision{}); }},
+       {{"binary", "One axis per level: every box is bounded after every halving.", {}},
+        [](const Parameters&) { return Subdivision(BinarySubdivision{}); }}});
+  return registry;
 }
-//! [subdivision-factory]
+//! [subdivision-registry]
+
+Subdivision createSubdivision(const StrategyChoice& choice) {
+  return subdivisionRegistry().find(choice.name).create(choice.parameters);
+}
+
+Subdivision createSubdivision(std::string_view spec) {
+  return createSubdivision(subdivisionRegistry().parse(spec));
+}
 
 namespace {
 

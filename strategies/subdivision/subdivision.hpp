@@ -50,11 +50,19 @@ static_assert(SubdivisionStrategy<BinarySubdivision>);
 /// The subdivision family: one closed variant.
 using Subdivision = std::variant<UniformSubdivision, BinarySubdivision>;
 
-/// Names accepted by createSubdivision, in the variant's order.
-inline constexpr std::array<std::string_view, 2> kSubdivisionNames{"uniform", "binary"};
+/// A subdivision factory: the model with the spec's parameter values. The traversal is
+/// instantiated per model, so each model is an alternative of the variant: a new model is one
+/// file, one alternative in Subdivision and one registry line (docs/adding-a-strategy.md).
+using SubdivisionFactory = Subdivision (*)(const Parameters& parameters);
 
-/// The subdivision strategy called `name`; throws InputError on an unknown name.
-Subdivision createSubdivision(std::string_view name);
+/// The subdivision family's registry (strategies/subdivision/subdivision.cpp; the CLI's
+/// `--subdivision`).
+Registry<SubdivisionFactory>& subdivisionRegistry();
+
+/// The subdivision strategy a parsed spec names.
+Subdivision createSubdivision(const StrategyChoice& choice);
+/// The subdivision strategy of a spec; UsageError on an unknown name, parameter or value.
+Subdivision createSubdivision(std::string_view spec);
 
 /// ZeroSetSubdiv (Alg. 1 step (1)): the solution cells of depth `grid.depth` of the problem
 /// that `bounding` was built for, on `grid` (whose domain must be the bounding's domain).
