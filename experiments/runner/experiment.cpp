@@ -562,14 +562,7 @@ ExperimentConfig loadExperimentConfig(const fs::path& file, bool quick) {
   const std::string name = file.string();
   const std::string text = readInputFile(file, "experiment config");
   checkTomlText(text, name);
-  toml::table top;
-  try {
-    top = toml::parse(text, std::string_view(name));
-  } catch (const toml::parse_error& error) {
-    throw InputError::at(name, static_cast<int>(error.source().begin.line),
-                         static_cast<int>(error.source().begin.column),
-                         "TOML syntax error: " + std::string(error.description()));
-  }
+  const toml::table top = parseTomlText(text, name);
   return ConfigReader(file, text).run(top, quick);
 }
 
@@ -1288,19 +1281,10 @@ class InterruptScope {
   }, savedTerm_{};
 };
 
-}  // namespace
-
-int runExperiment(ExperimentConfig config, const ExperimentOptions& options) {
-  const std::string started = utcNow();
-  const fs::path dir = options.outDir / config.id;
-  const fs::path runsDir = dir / "runs";
+/// Generated problems become files beside the results, so that each run can be repeated with
+/// `ndcontour solve`; an identical existing file is left alone.
+void writeGeneratedProblems(ExperimentConfig& config, const fs::path& dir) {
   std::error_code ec;
-  fs::create_directories(runsDir, ec);
-  if (ec || !fs::is_directory(runsDir, ec))
-    throw InputError(runsDir.string() + ": cannot create the output directory");
-
-  // Generated problems become files beside the results, so that each run can be repeated
-  // with `ndcontour solve`; an identical existing file is left alone.
   for (ExperimentProblem& p : config.problems) {
     if (p.generatedText.empty()) continue;
     fs::create_directories(dir / "problems", ec);
@@ -1309,16 +1293,18 @@ int runExperiment(ExperimentConfig config, const ExperimentOptions& options) {
     if (!fs::exists(p.path, ec) || readFile(p.path) != p.generatedText)
       writeAtomically(p.path, p.generatedText);
   }
+}
 
-  const std::vector<ExperimentRun> runs = experimentGrid(config);
-  std::vector<Outcome> outcomes(runs.size());
+/// Resume: a run whose folder has a summary finished before; its outcome is read back. Returns
+/// the runs still to do, in grid order.
+std::vector<std::size_t> resumeFinished(const std::vector<ExperimentRun>& runs,
+                                        const fs::path& runsDir, std::vector<Outcome>& outcomes,
+                                        Tally& tally) {
+  std::error_code ec;
   std::vector<std::size_t> pending;
-  Tally tally;
-  tally.total = runs.size();
   for (std::size_t i = 0; i < runs.size(); ++i) {
     const fs::path runDir = runsDir / runs[i].id;
     if (fs::exists(runDir / "summary.json", ec)) {
-      // Resume: a summary marks a finished run.
       outcomes[i] = readSummary(runDir);
       outcomes[i].skipped = true;
       ++tally.skipped;
@@ -1326,109 +1312,130 @@ int runExperiment(ExperimentConfig config, const ExperimentOptions& options) {
       pending.push_back(i);
     }
   }
-  std::size_t failedBefore = 0;
-  for (const Outcome& o : outcomes)
-    if (o.skipped && o.status != "ok") ++failedBefore;
-  const int jobs = std::max(1, options.jobs);
-  std::fprintf(stderr, "experiment %s%s: %zu runs, %zu finished before, %d at once, timeout %s s\n",
-               config.id.c_str(), config.quick ? " (quick)" : "", runs.size(), tally.skipped, jobs,
-               jsonNumber(config.timeoutS).c_str());
-  std::fflush(stderr);
+  return pending;
+}
 
-  ProgressReport progress(runs.size(), tally.skipped, failedBefore);
+/// Runs the pending runs as child processes, `jobs` at once, each within the timeout, until
+/// all finished or SIGINT / SIGTERM arrives.
+class Scheduler {
+ public:
+  Scheduler(const ExperimentConfig& config, const ExperimentOptions& options,
+            const std::vector<ExperimentRun>& runs, const fs::path& runsDir,
+            std::vector<Outcome>& outcomes, ProgressReport& progress)
+      : config_(config),
+        options_(options),
+        runs_(runs),
+        runsDir_(runsDir),
+        outcomes_(outcomes),
+        progress_(progress),
+        jobs_(std::max(1, options.jobs)) {}
+
+  /// Runs `pending`; on an interrupt the children still running are stopped.
+  void run(const std::vector<std::size_t>& pending) {
+    std::size_t next = 0;
+    {
+      InterruptScope interrupts;
+      while ((next < pending.size() || !running_.empty()) && !gInterrupted) {
+        // Start runs in grid order while there is room.
+        while (static_cast<int>(running_.size()) < jobs_ && next < pending.size() && !gInterrupted)
+          start(pending[next++]);
+        if (!collect()) {
+          std::this_thread::sleep_for(std::chrono::milliseconds(5));
+          progress_.tick();
+        }
+      }
+    }
+    if (!gInterrupted) return;
+    std::vector<pid_t> pids;
+    for (const Child& child : running_) pids.push_back(child.pid);
+    stopChildren(pids);
+  }
+
+ private:
   struct Child {
     pid_t pid;
     std::size_t run;
     Clock::time_point start;
   };
-  std::vector<Child> running;
-  std::size_t next = 0;
-  {
-    InterruptScope interrupts;
-    while ((next < pending.size() || !running.empty()) && !gInterrupted) {
-      // Start runs in grid order while there is room.
-      while (static_cast<int>(running.size()) < jobs && next < pending.size() && !gInterrupted) {
-        const std::size_t i = pending[next++];
-        const ExperimentRun& run = runs[i];
-        const ExperimentProblem& p = config.problems[run.problem];
-        const fs::path runDir = runsDir / run.id;
-        std::string error;
-        pid_t pid = -1;
-        try {
-          fs::create_directories(runDir, ec);
-          if (ec) throw InputError(runDir.string() + ": cannot create the run directory");
-          // The command that repeats this run by hand, from the repository root.
-          std::string command = "ndcontour";
-          for (const std::string& a : solveArguments(p.file, runDir.string(), run.settings))
-            command += " " + shellWord(a);
-          writeAtomically(runDir / "command.txt", command + "\n");
-          // Children that run at once share the machine's memory budget.
-          Settings shared = run.settings;
-          shared.maxMemoryBytes = std::max<std::uint64_t>(defaultMemoryBudget() / jobs, 1u << 30);
-          pid =
-              spawnRun(options.executable, solveArguments(p.path.string(), runDir.string(), shared),
-                       runDir / "stderr.txt", error);
-        } catch (const std::exception& e) {
-          error = e.what();
-        }
-        if (pid < 0) {
-          outcomes[i].status = "error";
-          outcomes[i].error = oneLine(error);
-          progress.finished(run.id, outcomes[i]);
-          continue;
-        }
-        running.push_back({pid, i, Clock::now()});
-      }
 
-      // Collect finished children and kill those past the timeout.
-      bool changed = false;
-      for (auto it = running.begin(); it != running.end();) {
-        int status = 0;
-        const pid_t got = ::waitpid(it->pid, &status, WNOHANG);
-        const double elapsed = std::chrono::duration<double>(Clock::now() - it->start).count();
-        bool timedOut = false;
-        if (got == 0 && elapsed > config.timeoutS) {
-          status = stopChildren({it->pid}).front();
-          timedOut = true;
-        } else if (got == 0 || (got < 0 && errno == EINTR)) {
-          ++it;
-          continue;
-        }
-        const fs::path runDir = runsDir / runs[it->run].id;
-        Outcome o;
-        if (got < 0 && !timedOut) {
-          o.status = "error";
-          o.error = std::string("lost the child process: ") + std::strerror(errno);
-        } else {
-          o = outcomeOf(runDir, status, timedOut, config.timeoutS);
-        }
-        o.seconds = elapsed;
-        outcomes[it->run] = o;
-        progress.finished(runs[it->run].id, o);
-        it = running.erase(it);
-        changed = true;
-      }
-      if (!changed) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-        progress.tick();
-      }
+  /// Starts run i (its folder, its command.txt, the child), or records why it could not.
+  void start(std::size_t i) {
+    const ExperimentRun& run = runs_[i];
+    const ExperimentProblem& p = config_.problems[run.problem];
+    const fs::path runDir = runsDir_ / run.id;
+    std::string error;
+    pid_t pid = -1;
+    try {
+      std::error_code ec;
+      fs::create_directories(runDir, ec);
+      if (ec) throw InputError(runDir.string() + ": cannot create the run directory");
+      // The command that repeats this run by hand, from the repository root.
+      std::string command = "ndcontour";
+      for (const std::string& a : solveArguments(p.file, runDir.string(), run.settings))
+        command += " " + shellWord(a);
+      writeAtomically(runDir / "command.txt", command + "\n");
+      // Children that run at once share the machine's memory budget.
+      Settings shared = run.settings;
+      shared.maxMemoryBytes = std::max<std::uint64_t>(defaultMemoryBudget() / jobs_, 1u << 30);
+      pid = spawnRun(options_.executable, solveArguments(p.path.string(), runDir.string(), shared),
+                     runDir / "stderr.txt", error);
+    } catch (const std::exception& e) {
+      error = e.what();
     }
+    if (pid < 0) {
+      outcomes_[i].status = "error";
+      outcomes_[i].error = oneLine(error);
+      progress_.finished(run.id, outcomes_[i]);
+      return;
+    }
+    running_.push_back({pid, i, Clock::now()});
   }
 
-  if (gInterrupted) {
-    // Finished runs keep their summaries; the rest run on the next invocation.
-    std::vector<pid_t> pids;
-    for (const Child& child : running) pids.push_back(child.pid);
-    stopChildren(pids);
-    progress.end();
-    std::fprintf(stderr,
-                 "experiment %s: interrupted; finished runs are kept and the next invocation "
-                 "resumes\n",
-                 config.id.c_str());
-    return 128 + gInterrupted;
+  /// Collects finished children and kills those past the timeout; whether any ended.
+  bool collect() {
+    bool changed = false;
+    for (auto it = running_.begin(); it != running_.end();) {
+      int status = 0;
+      const pid_t got = ::waitpid(it->pid, &status, WNOHANG);
+      const double elapsed = std::chrono::duration<double>(Clock::now() - it->start).count();
+      bool timedOut = false;
+      if (got == 0 && elapsed > config_.timeoutS) {
+        status = stopChildren({it->pid}).front();
+        timedOut = true;
+      } else if (got == 0 || (got < 0 && errno == EINTR)) {
+        ++it;
+        continue;
+      }
+      Outcome o;
+      if (got < 0 && !timedOut) {
+        o.status = "error";
+        o.error = std::string("lost the child process: ") + std::strerror(errno);
+      } else {
+        o = outcomeOf(runsDir_ / runs_[it->run].id, status, timedOut, config_.timeoutS);
+      }
+      o.seconds = elapsed;
+      outcomes_[it->run] = o;
+      progress_.finished(runs_[it->run].id, o);
+      it = running_.erase(it);
+      changed = true;
+    }
+    return changed;
   }
-  progress.end();
 
+  const ExperimentConfig& config_;
+  const ExperimentOptions& options_;
+  const std::vector<ExperimentRun>& runs_;
+  const fs::path& runsDir_;
+  std::vector<Outcome>& outcomes_;
+  ProgressReport& progress_;
+  const int jobs_;
+  std::vector<Child> running_;
+};
+
+/// The combined CSV, the provenance and the closing lines on standard output; the exit status.
+int finishExperiment(const ExperimentConfig& config, const ExperimentOptions& options,
+                     const std::vector<ExperimentRun>& runs, const std::vector<Outcome>& outcomes,
+                     Tally& tally, const fs::path& dir, const std::string& started) {
   for (std::size_t i = 0; i < runs.size(); ++i) {
     if (!outcomes[i].skipped) ++tally.ran;
     if (outcomes[i].status != "ok") {
@@ -1450,6 +1457,45 @@ int runExperiment(ExperimentConfig config, const ExperimentOptions& options) {
               (dir / "provenance.json").string().c_str());
   std::fflush(stdout);
   return tally.failed ? 1 : 0;
+}
+
+}  // namespace
+
+int runExperiment(ExperimentConfig config, const ExperimentOptions& options) {
+  const std::string started = utcNow();
+  const fs::path dir = options.outDir / config.id;
+  const fs::path runsDir = dir / "runs";
+  std::error_code ec;
+  fs::create_directories(runsDir, ec);
+  if (ec || !fs::is_directory(runsDir, ec))
+    throw InputError(runsDir.string() + ": cannot create the output directory");
+  writeGeneratedProblems(config, dir);
+
+  const std::vector<ExperimentRun> runs = experimentGrid(config);
+  std::vector<Outcome> outcomes(runs.size());
+  Tally tally;
+  tally.total = runs.size();
+  const std::vector<std::size_t> pending = resumeFinished(runs, runsDir, outcomes, tally);
+  std::size_t failedBefore = 0;
+  for (const Outcome& o : outcomes)
+    if (o.skipped && o.status != "ok") ++failedBefore;
+  std::fprintf(stderr, "experiment %s%s: %zu runs, %zu finished before, %d at once, timeout %s s\n",
+               config.id.c_str(), config.quick ? " (quick)" : "", runs.size(), tally.skipped,
+               std::max(1, options.jobs), jsonNumber(config.timeoutS).c_str());
+  std::fflush(stderr);
+
+  ProgressReport progress(runs.size(), tally.skipped, failedBefore);
+  Scheduler(config, options, runs, runsDir, outcomes, progress).run(pending);
+  progress.end();
+  if (gInterrupted) {
+    // Finished runs keep their summaries; the rest run on the next invocation.
+    std::fprintf(stderr,
+                 "experiment %s: interrupted; finished runs are kept and the next invocation "
+                 "resumes\n",
+                 config.id.c_str());
+    return 128 + gInterrupted;
+  }
+  return finishExperiment(config, options, runs, outcomes, tally, dir, started);
 }
 
 }  // namespace ndc

@@ -166,26 +166,28 @@ Complex<S> weld(const Complex<S>& complex, double tolerance) {
   return out;
 }
 
+namespace {
+
+/// The distinct edges of the simplices, each with the number of simplices on it.
+using EdgeCounts = std::unordered_map<std::uint64_t, std::int32_t>;
+
+/// Simplex s of `welded` as its k + 1 vertex numbers.
 template <class S>
-MeshStats analyse(const Complex<S>& welded, const System<S>& system, const Projector<S>& project) {
-  using std::abs;
-  using std::sqrt;
-  const int n = welded.n;
+std::span<const std::int32_t> simplexAt(const Complex<S>& welded, std::size_t s) {
+  const auto size = static_cast<std::size_t>(welded.k + 1);
+  return std::span<const std::int32_t>(welded.simplices.data() + s * size, size);
+}
+
+/// Distinct edges with their simplex counts, and the connected components of the edge graph
+/// (isolated vertices are components too).
+template <class S>
+EdgeCounts countEdges(const Complex<S>& welded, MeshStats& stats) {
   const int k = welded.k;
   const std::size_t vertexCount = welded.vertexCount();
-  const std::size_t simplexCount = welded.simplexCount();
-  MeshStats stats;
-  stats.vertices = static_cast<std::int64_t>(vertexCount);
-  const auto simplexAt = [&](std::size_t s) {
-    return std::span<const std::int32_t>(welded.simplices.data() + s * (k + 1),
-                                         static_cast<std::size_t>(k + 1));
-  };
-
-  // Distinct edges with the number of simplices on each; components from the edge graph.
-  std::unordered_map<std::uint64_t, std::int32_t> edges;
+  EdgeCounts edges;
   DisjointSets sets(vertexCount);
-  for (std::size_t s = 0; s < simplexCount; ++s) {
-    const auto v = simplexAt(s);
+  for (std::size_t s = 0; s < welded.simplexCount(); ++s) {
+    const auto v = simplexAt(welded, s);
     for (int a = 0; a <= k; ++a) {
       for (int b = a + 1; b <= k; ++b) {
         ++edges[edgeKey(v[a], v[b])];
@@ -194,84 +196,95 @@ MeshStats analyse(const Complex<S>& welded, const System<S>& system, const Proje
     }
   }
   stats.edges = static_cast<std::int64_t>(edges.size());
+  for (std::size_t v = 0; v < vertexCount; ++v)
+    if (sets.find(static_cast<std::int32_t>(v)) == static_cast<std::int32_t>(v)) ++stats.components;
+  return edges;
+}
+
+/// Polylines (k = 1): open ends (degree 1), branch vertices (degree >= 3), chi = V - E.
+void curveTopology(const EdgeCounts& edges, std::size_t vertexCount, MeshStats& stats) {
+  std::vector<std::int32_t> degree(vertexCount, 0);
+  for (const auto& [key, count] : edges) {
+    ++degree[key >> 32];
+    ++degree[key & 0xffffffffULL];
+  }
+  for (std::int32_t d : degree) {
+    if (d == 1) ++stats.openEnds;
+    if (d >= 3) ++stats.branchVertices;
+  }
+  stats.eulerCharacteristic = stats.vertices - stats.edges;
+}
+
+/// Triangle meshes (k = 2): an edge of one triangle is boundary, of three or more
+/// non-manifold; the boundary's loops; chi = V - E + T.
+void surfaceTopology(const EdgeCounts& edges, std::size_t vertexCount, std::size_t triangles,
+                     MeshStats& stats) {
+  stats.triangles = static_cast<std::int64_t>(triangles);
+  DisjointSets boundary(vertexCount);
+  std::vector<std::uint8_t> onBoundary(vertexCount, 0);
+  for (const auto& [key, count] : edges) {
+    if (count == 1) {
+      ++stats.boundaryEdges;
+      const auto a = static_cast<std::int32_t>(key >> 32);
+      const auto b = static_cast<std::int32_t>(key & 0xffffffffULL);
+      boundary.unite(a, b);
+      onBoundary[a] = onBoundary[b] = 1;
+    }
+    if (count >= 3) ++stats.nonmanifoldEdges;
+  }
   for (std::size_t v = 0; v < vertexCount; ++v) {
-    if (sets.find(static_cast<std::int32_t>(v)) == static_cast<std::int32_t>(v)) {
-      ++stats.components;  // isolated vertices are components too
+    const auto i = static_cast<std::int32_t>(v);
+    if (onBoundary[v] && boundary.find(i) == i) ++stats.boundaryComponents;
+  }
+  stats.eulerCharacteristic = stats.vertices - stats.edges + stats.triangles;
+}
+
+/// k >= 3, beyond docs/contracts.md 4.3: triangles are the distinct 2-faces, boundary /
+/// non-manifold count the (k-1)-faces of one / three or more simplices, and chi is the full
+/// alternating sum.
+template <class S>
+void higherTopology(const Complex<S>& welded, MeshStats& stats) {
+  const int k = welded.k;
+  std::int64_t chi = stats.vertices - stats.edges;
+  std::vector<std::int32_t> chosen;
+  for (int d = 2; d <= k; ++d) {
+    std::unordered_map<std::vector<std::int32_t>, std::int32_t, VectorHash> faces;
+    std::vector<std::vector<std::int32_t>> list;
+    for (std::size_t s = 0; s < welded.simplexCount(); ++s) {
+      list.clear();
+      subsets(simplexAt(welded, s), d + 1, chosen, 0, list);
+      for (auto& f : list) ++faces[std::move(f)];
+    }
+    const auto count = static_cast<std::int64_t>(faces.size());
+    chi += (d % 2 == 0 ? count : -count);
+    if (d == 2) stats.triangles = count;
+    if (d == k - 1) {
+      for (const auto& [face, c] : faces) {
+        if (c == 1) ++stats.boundaryEdges;
+        if (c >= 3) ++stats.nonmanifoldEdges;
+      }
     }
   }
+  stats.eulerCharacteristic = chi;
+}
 
-  if (k == 1) {
-    // Polylines: open ends (degree 1) and branch vertices (degree >= 3).
-    std::vector<std::int32_t> degree(vertexCount, 0);
-    for (const auto& [key, count] : edges) {
-      ++degree[key >> 32];
-      ++degree[key & 0xffffffffULL];
-    }
-    for (std::int32_t d : degree) {
-      if (d == 1) ++stats.openEnds;
-      if (d >= 3) ++stats.branchVertices;
-    }
-    stats.eulerCharacteristic = stats.vertices - stats.edges;
-  } else if (k == 2) {
-    // Triangle meshes: an edge of one triangle is boundary, of three or more non-manifold.
-    stats.triangles = static_cast<std::int64_t>(simplexCount);
-    DisjointSets boundary(vertexCount);
-    std::vector<std::uint8_t> onBoundary(vertexCount, 0);
-    for (const auto& [key, count] : edges) {
-      if (count == 1) {
-        ++stats.boundaryEdges;
-        const auto a = static_cast<std::int32_t>(key >> 32);
-        const auto b = static_cast<std::int32_t>(key & 0xffffffffULL);
-        boundary.unite(a, b);
-        onBoundary[a] = onBoundary[b] = 1;
-      }
-      if (count >= 3) ++stats.nonmanifoldEdges;
-    }
-    for (std::size_t v = 0; v < vertexCount; ++v) {
-      const auto i = static_cast<std::int32_t>(v);
-      if (onBoundary[v] && boundary.find(i) == i) ++stats.boundaryComponents;
-    }
-    stats.eulerCharacteristic = stats.vertices - stats.edges + stats.triangles;
-  } else if (k >= 3) {
-    // Beyond docs/contracts.md 4.3: triangles are the distinct 2-faces, boundary / non-manifold
-    // count the (k-1)-faces of one / three or more simplices, and chi is the full alternating sum.
-    std::int64_t chi = stats.vertices - stats.edges;
-    std::vector<std::int32_t> chosen;
-    for (int d = 2; d <= k; ++d) {
-      std::unordered_map<std::vector<std::int32_t>, std::int32_t, VectorHash> faces;
-      std::vector<std::vector<std::int32_t>> list;
-      for (std::size_t s = 0; s < simplexCount; ++s) {
-        list.clear();
-        subsets(simplexAt(s), d + 1, chosen, 0, list);
-        for (auto& f : list) ++faces[std::move(f)];
-      }
-      const auto count = static_cast<std::int64_t>(faces.size());
-      chi += (d % 2 == 0 ? count : -count);
-      if (d == 2) stats.triangles = count;
-      if (d == k - 1) {
-        for (const auto& [face, c] : faces) {
-          if (c == 1) ++stats.boundaryEdges;
-          if (c >= 3) ++stats.nonmanifoldEdges;
-        }
-      }
-    }
-    stats.eulerCharacteristic = chi;
-  }
-
-  // Accuracy: the residual at the vertices, in S.
+/// Accuracy: the largest residual at the vertices and the chord error, the distance of each
+/// simplex's barycentre to its Newton projection onto M (in S).
+template <class S>
+void accuracy(const Complex<S>& welded, const System<S>& system, const Projector<S>& project,
+              MeshStats& stats) {
+  using std::sqrt;
+  const int n = welded.n, k = welded.k;
   S worstResidual = 0;
-  for (std::size_t v = 0; v < vertexCount; ++v) {
+  for (std::size_t v = 0; v < welded.vertexCount(); ++v)
     worstResidual = std::max<S>(worstResidual, system.maxResidual(welded.vertex(v)));
-  }
   stats.maxResidual = toDouble(worstResidual);
 
-  // Chord error: distance of each simplex's barycentre to its Newton projection onto M.
   S worstChord = 0;
   std::vector<S> centre(n), projected(n);
-  for (std::size_t s = 0; s < simplexCount; ++s) {
-    const auto v = simplexAt(s);
+  for (std::size_t s = 0; s < welded.simplexCount(); ++s) {
     std::fill(centre.begin(), centre.end(), S(0));
-    for (std::int32_t i : v) {
+    for (std::int32_t i : simplexAt(welded, s)) {
       const auto x = welded.vertex(i);
       for (int j = 0; j < n; ++j) centre[j] += x[j];
     }
@@ -286,6 +299,19 @@ MeshStats analyse(const Complex<S>& welded, const System<S>& system, const Proje
     worstChord = std::max<S>(worstChord, sqrt(d2));
   }
   stats.maxChordError = toDouble(worstChord);
+}
+
+}  // namespace
+
+template <class S>
+MeshStats analyse(const Complex<S>& welded, const System<S>& system, const Projector<S>& project) {
+  MeshStats stats;
+  stats.vertices = static_cast<std::int64_t>(welded.vertexCount());
+  const EdgeCounts edges = countEdges(welded, stats);
+  if (welded.k == 1) curveTopology(edges, welded.vertexCount(), stats);
+  if (welded.k == 2) surfaceTopology(edges, welded.vertexCount(), welded.simplexCount(), stats);
+  if (welded.k >= 3) higherTopology(welded, stats);
+  accuracy(welded, system, project, stats);
   return stats;
 }
 

@@ -19,4 +19,18 @@ struct Box {
   S width(int j) const { return hi[j] - lo[j]; }
 };
 
+/// `box` in the scalar S (every bound converted exactly: S holds every double). The one
+/// conversion of a double box (a problem domain, a grid cell) to the run's scalar.
+template <class S>
+Box<S> toScalar(const Box<double>& box) {
+  Box<S> out;
+  out.lo.reserve(box.lo.size());
+  out.hi.reserve(box.hi.size());
+  for (int j = 0; j < box.dim(); ++j) {
+    out.lo.push_back(S(box.lo[j]));
+    out.hi.push_back(S(box.hi[j]));
+  }
+  return out;
+}
+
 }  // namespace ndc

@@ -491,25 +491,22 @@ void checkTomlText(const std::string& text, const std::string& file) {
 Problem parseProblemWith(const std::string& text, const std::string& file,
                          ApplicationBuilder applications) {
   checkTomlText(text, file);
-  toml::table root;
+  return Validator(text, file, applications).run(parseTomlText(text, file));
+}
+
+toml::table parseTomlText(const std::string& text, const std::string& file) {
   try {
-    root = toml::parse(text, std::string_view(file));
+    return toml::parse(text, std::string_view(file));
   } catch (const toml::parse_error& error) {
     throw InputError::at(file, static_cast<int>(error.source().begin.line),
                          static_cast<int>(error.source().begin.column),
                          "TOML syntax error: " + std::string(error.description()));
   }
-  return Validator(text, file, applications).run(root);
 }
 
 template <class S>
 Box<S> Problem::domainAs() const {
-  Box<S> box;
-  for (int j = 0; j < n(); ++j) {
-    box.lo.push_back(S(domain.lo[j]));
-    box.hi.push_back(S(domain.hi[j]));
-  }
-  return box;
+  return toScalar<S>(domain);
 }
 
 template Box<double> Problem::domainAs<double>() const;

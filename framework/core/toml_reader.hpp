@@ -59,6 +59,10 @@ class TomlReader {
 /// (framework/applications/load.hpp).
 using ApplicationBuilder = Problem (*)(const toml::table& root, TomlReader& reader);
 
+/// Parses TOML text (`file` names it in messages); a syntax error is an InputError at its line
+/// and column. The problem reader, the experiment runner and the report share it.
+toml::table parseTomlText(const std::string& text, const std::string& file);
+
 /// Parses and validates problem text (`file` is used in messages); throws InputError. A file
 /// with an `application` key is built by `applications`; without one (null) it is refused.
 Problem parseProblemWith(const std::string& text, const std::string& file,

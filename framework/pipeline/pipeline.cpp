@@ -53,16 +53,6 @@ Grid makeGrid(const Problem& problem, const Settings& settings) {
   return grid;
 }
 
-template <class S>
-Box<S> toScalarBox(const Box<double>& box) {
-  Box<S> out;
-  for (int j = 0; j < box.dim(); ++j) {
-    out.lo.push_back(S(box.lo[j]));
-    out.hi.push_back(S(box.hi[j]));
-  }
-  return out;
-}
-
 /// The most solution cells a k-manifold can plausibly meet at depth L in R^n: a k-manifold of
 /// moderate size meets about c 2^(k L) cells of the final grid; the budget allows c up to
 /// 2^(n + 6), capped at 2^27 (the memory guard's scale). More cells mean a zero set of a
@@ -193,8 +183,7 @@ SolutionCells subdividePatches(const Problem& problem, const Settings& settings,
   for (std::size_t r = 0; r < problem.roots.size(); ++r) {
     const Box<double>& root = problem.roots[r];
     Grid sub{n, below, root};
-    const Bounding<S> bounding =
-        createBounding<S>(settings.bounding, problem, toScalarBox<S>(root));
+    const Bounding<S> bounding = createBounding<S>(settings.bounding, problem, toScalar<S>(root));
     Progress part;
     if (progress) part = [&](const char* stage, double f) { progress(stage, (r + f) / roots); };
     const SolutionCells found =
@@ -224,7 +213,7 @@ double precisionLoss(const Expression& e, const Box<double>& box, const Bernstei
     ~Restore() { setMpfrPrecision(bits); }
   } restore;
   setMpfrPrecision(256);
-  const Bernstein<Mpfr> exact = e.toBernstein<Mpfr>(toScalarBox<Mpfr>(box));
+  const Bernstein<Mpfr> exact = e.toBernstein<Mpfr>(toScalar<Mpfr>(box));
   double largest = 0, error = 0;
   for (std::size_t j = 0; j < exact.coefficients().size(); ++j) {
     const Mpfr& c = exact.coefficients()[j];
@@ -246,7 +235,7 @@ std::vector<double> checkEquations(const Problem& problem, const Box<S>& domain)
   constexpr double kLimit = 1e300;
   std::vector<Box<S>> boxes;
   if (problem.roots.empty()) boxes.push_back(domain);
-  for (const Box<double>& patch : problem.roots) boxes.push_back(toScalarBox<S>(patch));
+  for (const Box<double>& patch : problem.roots) boxes.push_back(toScalar<S>(patch));
   std::vector<double> losses(problem.equations.size(), 0.0);
   for (std::size_t i = 0; i < problem.equations.size(); ++i) {
     for (std::size_t b = 0; b < boxes.size(); ++b) {
@@ -308,7 +297,7 @@ template <class S>
 std::vector<std::uint8_t> refineCell(const Problem& problem, const Settings& settings,
                                      const Subdivision& subdivision, const Box<double>& cell) {
   const int n = problem.n();
-  const Bounding<S> bounding = createBounding<S>(settings.bounding, problem, toScalarBox<S>(cell));
+  const Bounding<S> bounding = createBounding<S>(settings.bounding, problem, toScalar<S>(cell));
   const SolutionCells children = subdivide<S>(bounding, subdivision, Grid{n, 1, cell});
   std::vector<std::uint8_t> flags(std::size_t{1} << n, 0);
   for (std::size_t c = 0; c < children.size(); ++c) {
@@ -336,20 +325,15 @@ void checkCertificate(Summary& summary) {
   t.reason = "the certificate holds but the welded mesh has " + flaw;
 }
 
-template <class S>
-RunResult run(const Problem& problem, const Settings& settings, const Progress& progress) {
-  const auto start = Clock::now();
-  RunResult result;
-  result.n = problem.n();
-  result.k = problem.k();
-  Summary& summary = result.summary;
+/// The summary's header: the problem, and the settings with each strategy by name and its
+/// parameter values apart (contracts 4.3).
+void describeRun(Summary& summary, const Problem& problem, const Settings& settings,
+                 const StrategyChoices& choices, unsigned precisionBits) {
   summary.problem = problem.name;
   summary.n = problem.n();
   summary.k = problem.k();
   summary.settings = settings;
-  summary.settings.precisionBits = ScalarTraits<S>::precisionBits();
-  // summary.json names each strategy and lists its parameter values apart (contracts 4.3).
-  const StrategyChoices choices = parseStrategies(settings);
+  summary.settings.precisionBits = precisionBits;
   summary.settings.bounding = choices.bounding.name;
   summary.settings.subdivision = choices.subdivision.name;
   summary.settings.projection = choices.projection.name;
@@ -360,12 +344,11 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
                         {"projection", choices.projection.parameters.json()},
                         {"classification", choices.classification.parameters.json()},
                         {"connection", choices.connection.parameters.json()}};
+}
 
-  // Choose every strategy by name before any work, so a bad name costs nothing.
-  const Grid grid = makeGrid(problem, settings);
-  const Box<S> domain = toScalarBox<S>(grid.domain);
-  const System<S> system(problem);
-  const std::vector<double> losses = checkEquations<S>(problem, domain);
+/// B-spline input keeps its knots on grid planes: no jitter, and a depth at which every knot
+/// span is a grid cell.
+void checkPiecewiseSettings(const Problem& problem, const Settings& settings) {
   if (!problem.roots.empty() && settings.jitter)
     throw InputError(
         problem.path +
@@ -374,17 +357,32 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
     throw InputError("depth " + std::to_string(settings.depth) + " is below " +
                      std::to_string(problem.rootLevel) +
                      ", the level at which every B-spline knot span is a grid cell");
-  // One bounding over the domain, or one per B-spline patch (built in subdividePatches).
-  const std::optional<Bounding<S>> bounding =
-      problem.roots.empty()
-          ? std::optional<Bounding<S>>(createBounding<S>(choices.bounding, problem, domain))
-          : std::nullopt;
-  const Subdivision subdivision = createSubdivision(choices.subdivision);
-  const Projection<S> projection = createProjection<S>(choices.projection, system);
-  const Classification classification = createClassification(choices.classification);
-  const Connection connection = createConnection(choices.connection);
+}
 
-  // Alg. 1 (1): ZeroSetSubdiv at a depth, with a budget of solution cells.
+/// The connection's record of the topology; a connection that does not certify says so.
+template <class S>
+void recordTopology(Summary& summary, const ConnectionOutput<S>& connected,
+                    const StrategyChoice& connection, int depth) {
+  summary.topology = connected.topology;
+  if (connection.name != "crossing") {
+    summary.topology.baseLevel = summary.topology.maxLevel = depth;
+    summary.topology.maxDepth = depth;
+    summary.topology.reason =
+        "the " + connection.name + " connection does not certify topology (crossing does)";
+  }
+  summary.ambiguousCells = connected.ambiguousCells;
+  summary.singularCells = connected.singularCells;
+  summary.offManifoldVertices = connected.offManifoldVertices;
+  summary.perturbation = connected.perturbation;
+}
+
+/// Alg. 1 (1): ZeroSetSubdiv at the final depth within the memory budget and the cell budget
+/// of a k-manifold (bounding: one over the domain, or none for one per B-spline patch).
+template <class S>
+SolutionCells solutionCells(Summary& summary, const Problem& problem, const Settings& settings,
+                            const Grid& grid, const std::optional<Bounding<S>>& bounding,
+                            const Subdivision& subdivision, const Progress& progress) {
+  // ZeroSetSubdiv at a depth, with a budget of solution cells.
   const auto subdivideAt = [&](const Grid& at, std::int64_t maxCells, const Progress& report) {
     return bounding ? subdivide<S>(*bounding, subdivision, at, report, maxCells)
                     : subdividePatches<S>(problem, settings, subdivision, at, report, maxCells);
@@ -413,18 +411,99 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   summary.tSubdivision = secondsSince(t);
   summary.visited = cells.visited;
   summary.solution = static_cast<std::int64_t>(cells.size());
+  return cells;
+}
 
-  // Alg. 1: project each cell's centroid onto M, then classify the cell.
-  t = Clock::now();
-  const Projections<S> projections = projectCells<S>(projection, cells, domain, progress);
-  const std::vector<CellClass> classes =
-      classifyCells<S>(classification, cells, domain, projections);
-  summary.tProjection = secondsSince(t);
+/// Counts the normal, abnormal and failed cells.
+void countClasses(Summary& summary, const std::vector<CellClass>& classes) {
   for (CellClass c : classes) {
     if (c == CellClass::kNormal) ++summary.normal;
     if (c == CellClass::kAbnormal) ++summary.abnormal;
     if (c == CellClass::kFailed) ++summary.failed;
   }
+}
+
+/// The complex joined at the singular points of M (framework/pipeline/singular.hpp), then
+/// welded (vertices closer than 1e-9 of the domain's largest width are one).
+template <class S>
+Complex<S> weldAtSingularPoints(Complex<S>& complex, const std::vector<SingularPoint>& points,
+                                const Grid& grid) {
+  double diameter = 0;
+  for (int j = 0; j < grid.n; ++j) diameter = std::max(diameter, grid.domain.width(j));
+  joinAtSingularPoints<S>(complex, points, grid);
+  return weld<S>(complex, 1e-9 * diameter);
+}
+
+/// The outputs in double: the welded mesh and the per-cell data.
+template <class S>
+void writeBack(RunResult& result, const Complex<S>& welded, const SolutionCells& cells,
+               const Grid& grid, const Box<S>& domain, const Projections<S>& projections,
+               const std::vector<CellClass>& classes) {
+  const int n = grid.n;
+  for (const S& v : welded.vertices) result.vertices.push_back(toDouble(v));
+  result.simplices = welded.simplices;
+  result.cellIndex = cells.index;
+  result.cellClass = classes;
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    const Box<S> box = cellBox(grid, domain, cells.cell(c));
+    for (int j = 0; j < n; ++j) {
+      result.cellCentre.push_back(toDouble(S((box.lo[j] + box.hi[j]) / 2)));
+      result.cellPoint.push_back(toDouble(projections.at(c)[j]));
+    }
+  }
+}
+
+/// Application problems: the image map, and where its denominator vanishes on the mesh.
+void imageOutputs(RunResult& result, const Problem& problem) {
+  if (!problem.application) return;
+  Summary& summary = result.summary;
+  result.application = problem.application;
+  summary.application = problem.application->name;
+  summary.singularName = problem.application->singularName;
+  const std::size_t count = result.vertices.size() / static_cast<std::size_t>(problem.n());
+  for (std::size_t v = 0; v < count; ++v) {
+    bool singular = false;
+    problem.application->image(
+        std::span<const double>(result.vertices.data() + v * problem.n(), problem.n()), &singular);
+    summary.imageSingularVertices += singular;
+  }
+}
+
+template <class S>
+RunResult run(const Problem& problem, const Settings& settings, const Progress& progress) {
+  const auto start = Clock::now();
+  RunResult result;
+  result.n = problem.n();
+  result.k = problem.k();
+  Summary& summary = result.summary;
+  const StrategyChoices choices = parseStrategies(settings);
+  describeRun(summary, problem, settings, choices, ScalarTraits<S>::precisionBits());
+
+  // Choose every strategy before any work, so a bad spec costs nothing.
+  const Grid grid = makeGrid(problem, settings);
+  const Box<S> domain = toScalar<S>(grid.domain);
+  const System<S> system(problem);
+  const std::vector<double> losses = checkEquations<S>(problem, domain);
+  checkPiecewiseSettings(problem, settings);
+  // One bounding over the domain, or one per B-spline patch (built in subdividePatches).
+  const std::optional<Bounding<S>> bounding =
+      problem.roots.empty()
+          ? std::optional<Bounding<S>>(createBounding<S>(choices.bounding, problem, domain))
+          : std::nullopt;
+  const Subdivision subdivision = createSubdivision(choices.subdivision);
+  const Projection<S> projection = createProjection<S>(choices.projection, system);
+  const Classification classification = createClassification(choices.classification);
+  const Connection connection = createConnection(choices.connection);
+  const SolutionCells cells =
+      solutionCells<S>(summary, problem, settings, grid, bounding, subdivision, progress);
+
+  // Alg. 1: project each cell's centroid onto M, then classify the cell.
+  auto t = Clock::now();
+  const Projections<S> projections = projectCells<S>(projection, cells, domain, progress);
+  const std::vector<CellClass> classes =
+      classifyCells<S>(classification, cells, domain, projections);
+  summary.tProjection = secondsSince(t);
+  countClasses(summary, classes);
 
   // Alg. 1: connect the cells into a complex.
   const Projector<S> project = makeProjector<S>(projection);
@@ -438,58 +517,20 @@ RunResult run(const Problem& problem, const Settings& settings, const Progress& 
   input.coefficientError = coefficientErrors(losses);
   ConnectionOutput<S> connected = connect<S>(connection, input);
   summary.tConnection = secondsSince(t);
-  summary.topology = connected.topology;
-  if (choices.connection.name != "crossing") {
-    summary.topology.baseLevel = summary.topology.maxLevel = settings.depth;
-    summary.topology.maxDepth = settings.depth;
-    summary.topology.reason =
-        "the " + choices.connection.name + " connection does not certify topology (crossing does)";
-  }
-  summary.ambiguousCells = connected.ambiguousCells;
-  summary.singularCells = connected.singularCells;
-  summary.offManifoldVertices = connected.offManifoldVertices;
-  summary.perturbation = connected.perturbation;
+  recordTopology<S>(summary, connected, choices.connection, settings.depth);
 
   // Analysis on the welded mesh.
   t = Clock::now();
-  double diameter = 0;
-  for (int j = 0; j < problem.n(); ++j) diameter = std::max(diameter, grid.domain.width(j));
-  // Where the Jacobian loses rank on M: located and reported (framework/pipeline/singular.hpp), and
-  // the mesh joined there before welding.
   summary.singularPoints =
       findSingularPoints<S>(problem, system, cells, projections, domain).points;
-  joinAtSingularPoints<S>(connected.complex, summary.singularPoints, grid);
-  const Complex<S> welded = weld<S>(connected.complex, 1e-9 * diameter);
+  const Complex<S> welded =
+      weldAtSingularPoints<S>(connected.complex, summary.singularPoints, grid);
   summary.mesh = analyse<S>(welded, system, project);
   summary.tAnalysis = secondsSince(t);
   checkCertificate(summary);
 
-  // Outputs in double.
-  for (const S& v : welded.vertices) result.vertices.push_back(toDouble(v));
-  result.simplices = welded.simplices;
-  result.cellIndex = cells.index;
-  result.cellClass = classes;
-  for (std::size_t c = 0; c < cells.size(); ++c) {
-    const Box<S> box = cellBox(grid, domain, cells.cell(c));
-    for (int j = 0; j < problem.n(); ++j) {
-      result.cellCentre.push_back(toDouble(S((box.lo[j] + box.hi[j]) / 2)));
-      result.cellPoint.push_back(toDouble(projections.at(c)[j]));
-    }
-  }
-  // Application problems: the image map, and where its denominator vanishes on the mesh.
-  if (problem.application) {
-    result.application = problem.application;
-    summary.application = problem.application->name;
-    summary.singularName = problem.application->singularName;
-    const std::size_t count = result.vertices.size() / static_cast<std::size_t>(problem.n());
-    for (std::size_t v = 0; v < count; ++v) {
-      bool singular = false;
-      problem.application->image(
-          std::span<const double>(result.vertices.data() + v * problem.n(), problem.n()),
-          &singular);
-      summary.imageSingularVertices += singular;
-    }
-  }
+  writeBack<S>(result, welded, cells, grid, domain, projections, classes);
+  imageOutputs(result, problem);
   summary.tTotal = secondsSince(start);
   return result;
 }

@@ -99,6 +99,19 @@ class Search {
   const std::vector<Bernstein<S>>& rootFor(std::span<const std::int32_t> cell);
   CellKey blockKey(std::span<const std::int32_t> cell) const;
   bool excluded(std::span<const std::int32_t> cell, SingularSearch& out);
+  /// Step 1: the cells where rank deficiency cannot be excluded, in cell order.
+  std::vector<std::int32_t> findCandidates(SingularSearch& out);
+  /// Step 2: clusters of face-adjacent candidates within one block, as positions in
+  /// `candidates`, best score first.
+  std::vector<std::vector<std::int32_t>> clusterCandidates(
+      const std::vector<std::int32_t>& candidates);
+  /// Step 3 for one cluster: Gauss-Newton from its best cells until one point near the cluster
+  /// is found; merged into `found` (the better of two points one cell apart stays).
+  void searchCluster(const std::vector<std::int32_t>& cluster,
+                     const std::vector<std::int32_t>& candidates, std::vector<Located<S>>& found,
+                     SingularSearch& out);
+  /// The start of Gauss-Newton for cell c.
+  std::vector<S> seedOf(std::size_t c) const;
   S score(std::size_t c);
   bool locate(std::span<const S> start, Located<S>& result);
   bool accept(const std::vector<S>& x, Located<S>& result);
@@ -400,24 +413,50 @@ bool Search<S>::accept(const std::vector<S>& x, Located<S>& result) {
 template <class S>
 SingularSearch Search<S>::run() {
   SingularSearch out;
-  const std::size_t count = cells_.size();
-  out.cells = static_cast<std::int64_t>(count);
-  if (count == 0 || m_ == 0) return out;
-
-  // Step 1: candidate cells, where rank deficiency cannot be excluded.
-  std::vector<std::int32_t> candidates;
-  std::vector<std::int32_t> position(count, -1);
-  for (std::size_t c = 0; c < count; ++c) {
-    if (excluded(cells_.cell(c), out)) continue;
-    position[c] = static_cast<std::int32_t>(candidates.size());
-    candidates.push_back(static_cast<std::int32_t>(c));
-  }
-  out.candidates = static_cast<std::int64_t>(candidates.size());
+  out.cells = static_cast<std::int64_t>(cells_.size());
+  if (cells_.size() == 0 || m_ == 0) return out;
+  const std::vector<std::int32_t> candidates = findCandidates(out);  // step 1
   if (candidates.empty()) return out;
   for (S& s : scale_)
     if (!(s > 0)) s = 1;
+  const std::vector<std::vector<std::int32_t>> clusters = clusterCandidates(candidates);  // 2
+  out.clusters = static_cast<std::int64_t>(clusters.size());
+  // Step 3: Gauss-Newton from the best cells of each cluster; merge duplicates.
+  std::vector<Located<S>> found;
+  for (const auto& cluster : clusters) {
+    if (out.attempts >= options_.maxAttempts) break;
+    if (static_cast<int>(found.size()) >= options_.maxPoints) break;
+    searchCluster(cluster, candidates, found, out);
+  }
+  for (const Located<S>& p : found) {
+    SingularPoint sp;
+    for (const S& v : p.x) sp.point.push_back(toDouble(v));
+    sp.sigmaMin = toDouble(p.sigma);
+    out.points.push_back(std::move(sp));
+  }
+  std::sort(out.points.begin(), out.points.end(),
+            [](const SingularPoint& p, const SingularPoint& q) { return p.point < q.point; });
+  return out;
+}
 
-  // Step 2: clusters of face-adjacent candidates within one block (union-find).
+template <class S>
+std::vector<std::int32_t> Search<S>::findCandidates(SingularSearch& out) {
+  // Step 1: candidate cells, where rank deficiency cannot be excluded.
+  std::vector<std::int32_t> candidates;
+  for (std::size_t c = 0; c < cells_.size(); ++c)
+    if (!excluded(cells_.cell(c), out)) candidates.push_back(static_cast<std::int32_t>(c));
+  out.candidates = static_cast<std::int64_t>(candidates.size());
+  return candidates;
+}
+
+template <class S>
+std::vector<std::vector<std::int32_t>> Search<S>::clusterCandidates(
+    const std::vector<std::int32_t>& candidates) {
+  // Step 2: clusters of face-adjacent candidates within one block (union-find), each sorted by
+  // score (best first), the clusters by their best score.
+  std::vector<std::int32_t> position(cells_.size(), -1);
+  for (std::size_t a = 0; a < candidates.size(); ++a)
+    position[static_cast<std::size_t>(candidates[a])] = static_cast<std::int32_t>(a);
   std::vector<std::int32_t> parent(candidates.size());
   std::iota(parent.begin(), parent.end(), 0);
   const auto find = [&](std::int32_t a) {
@@ -448,69 +487,63 @@ SingularSearch Search<S>::run() {
   std::sort(clusters.begin(), clusters.end(), [&](const auto& p, const auto& q) {
     return scores[p[0]] < scores[q[0]] || (!(scores[q[0]] < scores[p[0]]) && p[0] < q[0]);
   });
-  out.clusters = static_cast<std::int64_t>(clusters.size());
+  return clusters;
+}
 
-  // Step 3: Gauss-Newton from the best cells of each cluster; merge duplicates.
-  std::vector<Located<S>> found;
+template <class S>
+void Search<S>::searchCluster(const std::vector<std::int32_t>& cluster,
+                              const std::vector<std::int32_t>& candidates,
+                              std::vector<Located<S>>& found, SingularSearch& out) {
+  // The cluster's cells grown by one cell: where its point must lie.
+  std::vector<std::int32_t> lo(n_, grid_.cellsPerAxis()), hi(n_, -1);
+  for (std::int32_t a : cluster) {
+    const auto cell = cells_.cell(candidates[a]);
+    for (int j = 0; j < n_; ++j) {
+      lo[j] = std::min(lo[j], cell[j] - 1);
+      hi[j] = std::max(hi[j], cell[j] + 2);
+    }
+  }
   const auto sameAs = [&](const Located<S>& p, const Located<S>& q) {
     using std::abs;
     for (int j = 0; j < n_; ++j)
       if (!(abs(p.x[j] - q.x[j]) < cellWidth_[j])) return false;
     return true;
   };
-  for (const auto& cluster : clusters) {
-    if (out.attempts >= options_.maxAttempts) break;
-    if (static_cast<int>(found.size()) >= options_.maxPoints) break;
-    // The cluster's cells grown by one cell: where its point must lie.
-    std::vector<std::int32_t> lo(n_, grid_.cellsPerAxis()), hi(n_, -1);
-    for (std::int32_t a : cluster) {
-      const auto cell = cells_.cell(candidates[a]);
-      for (int j = 0; j < n_; ++j) {
-        lo[j] = std::min(lo[j], cell[j] - 1);
-        hi[j] = std::max(hi[j], cell[j] + 2);
-      }
+  const int tries = std::min<int>(options_.seedsPerCluster, static_cast<int>(cluster.size()));
+  for (int s = 0; s < tries && out.attempts < options_.maxAttempts; ++s) {
+    ++out.attempts;
+    Located<S> point;
+    if (!locate(seedOf(static_cast<std::size_t>(candidates[cluster[s]])), point)) continue;
+    bool near = true;
+    for (int j = 0; j < n_ && near; ++j) {
+      near = point.x[j] >= domain_.lo[j] + cellWidth_[j] * S(double(lo[j])) &&
+             point.x[j] <= domain_.lo[j] + cellWidth_[j] * S(double(hi[j]));
     }
-    const int tries = std::min<int>(options_.seedsPerCluster, static_cast<int>(cluster.size()));
-    for (int s = 0; s < tries && out.attempts < options_.maxAttempts; ++s) {
-      const std::size_t c = static_cast<std::size_t>(candidates[cluster[s]]);
-      std::vector<S> seed(n_);
-      if (projections_.converged[c]) {
-        const auto p = projections_.at(c);
-        std::copy(p.begin(), p.end(), seed.begin());
-      } else {
-        const Box<S> box = cellBox<S>(grid_, domain_, cells_.cell(c));
-        for (int j = 0; j < n_; ++j) seed[j] = (box.lo[j] + box.hi[j]) / 2;
-      }
-      ++out.attempts;
-      Located<S> point;
-      if (!locate(seed, point)) continue;
-      bool near = true;
-      for (int j = 0; j < n_ && near; ++j) {
-        near = point.x[j] >= domain_.lo[j] + cellWidth_[j] * S(double(lo[j])) &&
-               point.x[j] <= domain_.lo[j] + cellWidth_[j] * S(double(hi[j]));
-      }
-      if (!near) continue;
-      ++out.accepted;
-      auto same = std::find_if(found.begin(), found.end(),
-                               [&](const Located<S>& q) { return sameAs(point, q); });
-      if (same == found.end()) {
-        found.push_back(std::move(point));
-      } else if (point.scaledSigma < same->scaledSigma) {
-        *same = std::move(point);
-      }
-      break;  // one point per cluster
+    if (!near) continue;
+    ++out.accepted;
+    auto same = std::find_if(found.begin(), found.end(),
+                             [&](const Located<S>& q) { return sameAs(point, q); });
+    if (same == found.end()) {
+      found.push_back(std::move(point));
+    } else if (point.scaledSigma < same->scaledSigma) {
+      *same = std::move(point);
     }
+    return;  // one point per cluster
   }
+}
 
-  for (const Located<S>& p : found) {
-    SingularPoint sp;
-    for (const S& v : p.x) sp.point.push_back(toDouble(v));
-    sp.sigmaMin = toDouble(p.sigma);
-    out.points.push_back(std::move(sp));
+template <class S>
+std::vector<S> Search<S>::seedOf(std::size_t c) const {
+  // The cell's projected point, or its centre where Newton did not converge.
+  std::vector<S> seed(n_);
+  if (projections_.converged[c]) {
+    const auto p = projections_.at(c);
+    std::copy(p.begin(), p.end(), seed.begin());
+  } else {
+    const Box<S> box = cellBox<S>(grid_, domain_, cells_.cell(c));
+    for (int j = 0; j < n_; ++j) seed[j] = (box.lo[j] + box.hi[j]) / 2;
   }
-  std::sort(out.points.begin(), out.points.end(),
-            [](const SingularPoint& p, const SingularPoint& q) { return p.point < q.point; });
-  return out;
+  return seed;
 }
 
 }  // namespace

@@ -440,33 +440,53 @@ bool LinearizedBounding<S>::mayContainZero(const State& state) const {
   return !enabled_ || !linearizationExcludes(state.box);
 }
 
+namespace {
+
+/// Index of (row, col) in a row-major matrix with `cols` columns.
+inline std::size_t at(int row, int col, int cols) {
+  return static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) +
+         static_cast<std::size_t>(col);
+}
+
+}  // namespace
+
 template <class S>
 bool LinearizedBounding<S>::linearizationExcludes(const Box<S>& box) const {
   if (!enabled_) return false;
-  using std::abs;
-  using std::isfinite;
-  using std::sqrt;
-  const int n = n_, m = m_, k = n_ - m_;
-  const S& tol = tol_;
-  const S up = S(1) + tol;
-  const auto at = [](int row, int col, int cols) {
-    return static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) +
-           static_cast<std::size_t>(col);
-  };
+  // The steps of the class comment; a step that cannot conclude keeps the box.
+  const S hh = centreAndHalfWidths(box);  // 1
+  if (!linearise()) return false;         // 2: an enclosure that is not finite
+  if (!factorTranspose()) return false;   // 3: J_c (nearly) rank-deficient
+  invertLowerFactor();                    // 4
+  S migSq = 0;
+  if (rowTestExcludes(migSq)) return true;       // 5
+  if (ballTestExcludes(migSq, hh)) return true;  // 6
+  kernelBounds();                                // 7
+  return kernelPropagationExcludes();
+}
 
-  // 1. Centre c and half-widths h >= |x - c| on the box (rounded up).
-  S hh = 0;  // |h|_2^2
-  for (int j = 0; j < n; ++j) {
+template <class S>
+S LinearizedBounding<S>::centreAndHalfWidths(const Box<S>& box) const {
+  // 1. Centre c and half-widths h >= |x - c| on the box (rounded up); returns |h|_2^2.
+  const S up = S(1) + tol_;
+  S hh = 0;
+  for (int j = 0; j < n_; ++j) {
     c_[j] = (box.lo[j] + box.hi[j]) / 2;
     h_[j] = std::max(box.hi[j] - c_[j], c_[j] - box.lo[j]) * up;
     hh += h_[j] * h_[j];
   }
-  hh *= up;
+  return hh * up;
+}
 
+template <class S>
+bool LinearizedBounding<S>::linearise() const {
   // 2. The linearised system J_c d = -g, g in G = mu_i +- rho_i: F(c) enclosed at the point,
   // J_c = mid J(X), r_i = sum_j mag(J_ij(X) - J_c,ij) h_j = sum_j rad J_ij(X) h_j (mean value
   // theorem).
-  for (int i = 0; i < m; ++i) {
+  using std::isfinite;
+  const int n = n_;
+  const S up = S(1) + tol_;
+  for (int i = 0; i < m_; ++i) {
     S* jac = &jac_[at(i, 0, n)];
     S r = 0;
     if (affine_[i]) {
@@ -486,9 +506,16 @@ bool LinearizedBounding<S>::linearizationExcludes(const Box<S>& box) const {
     rho_[i] = (stackRad_[0] + r * up) * up;
     if (!isfinite(rho_[i])) return false;
   }
+  return true;
+}
 
+template <class S>
+bool LinearizedBounding<S>::factorTranspose() const {
   // 3. Householder QR of J_c^T (n x m, column i = row i of J_c): J_c^T = Q [R; 0]. A pivot
   // below 1e-10 of the largest row norm means J_c is (nearly) rank-deficient: keep the box.
+  using std::isfinite;
+  using std::sqrt;
+  const int n = n_, m = m_;
   std::copy(jac_.begin(), jac_.end(), w_.begin());
   S scale = 0;
   for (int i = 0; i < m; ++i) {
@@ -511,32 +538,31 @@ bool LinearizedBounding<S>::linearizationExcludes(const Box<S>& box) const {
     v[i] -= alpha;
     beta_[i] = 2 / vv;
     diag_[i] = alpha;
-    for (int col = i + 1; col < m; ++col) {
-      S* x = &w_[at(col, 0, n)];
-      S s = 0;
-      for (int r = i; r < n; ++r) s += v[r] * x[r];
-      s *= beta_[i];
-      for (int r = i; r < n; ++r) x[r] -= s * v[r];
-    }
+    for (int col = i + 1; col < m; ++col) reflect(i, &w_[at(col, 0, n)]);
   }
   // Q = H_0 ... H_{m-1}, accumulated backwards (H_i only touches columns >= i of the partial
   // product). Columns 0..m-1 are Q1 (the row space of J_c), m..n-1 are N = Q2 (its kernel).
   std::fill(q_.begin(), q_.end(), S(0));
   for (int j = 0; j < n; ++j) q_[at(j, j, n)] = 1;
-  for (int i = m - 1; i >= 0; --i) {
-    const S* v = &w_[at(i, 0, n)];
-    for (int col = i; col < n; ++col) {
-      S* x = &q_[at(col, 0, n)];
-      S s = 0;
-      for (int r = i; r < n; ++r) s += v[r] * x[r];
-      s *= beta_[i];
-      for (int r = i; r < n; ++r) x[r] -= s * v[r];
-    }
-  }
-  const auto q1 = [&](int row, int col) -> const S& { return q_[at(col, row, n)]; };
-  const auto nul = [&](int row, int col) -> const S& { return q_[at(m + col, row, n)]; };
+  for (int i = m - 1; i >= 0; --i)
+    for (int col = i; col < n; ++col) reflect(i, &q_[at(col, 0, n)]);
+  return true;
+}
 
+template <class S>
+void LinearizedBounding<S>::reflect(int i, S* x) const {
+  // x <- (I - beta_i v_i v_i^T) x on rows i..n-1, v_i the i-th reflector (column i of w_).
+  const S* v = &w_[at(i, 0, n_)];
+  S s = 0;
+  for (int r = i; r < n_; ++r) s += v[r] * x[r];
+  s *= beta_[i];
+  for (int r = i; r < n_; ++r) x[r] -= s * v[r];
+}
+
+template <class S>
+void LinearizedBounding<S>::invertLowerFactor() const {
   // 4. P = L^{-1} with L = R^T (L L^T = J_c J_c^T): L(i,i) = diag_i, L(i,t) = R(t,i) = w_[i][t].
+  const int n = n_, m = m_;
   for (int col = 0; col < m; ++col) {
     for (int i = 0; i < m; ++i) {
       if (i < col) {
@@ -548,9 +574,16 @@ bool LinearizedBounding<S>::linearizationExcludes(const Box<S>& box) const {
       p_[at(i, col, m)] = s / diag_[i];
     }
   }
+}
 
+template <class S>
+bool LinearizedBounding<S>::rowTestExcludes(S& migSq) const {
   // 5. Row test. P J_c d = -P g, and P J_c = Q1^T up to rounding; its computed value carries
   // the error bound tol |P| |J_c| (gamma_m of an m-term dot product).
+  using std::abs;
+  const int n = n_, m = m_;
+  const S& tol = tol_;
+  const S up = S(1) + tol;
   for (int i = 0; i < m; ++i)
     for (int j = 0; j < n; ++j) {
       S s = 0, sa = 0;
@@ -561,7 +594,6 @@ bool LinearizedBounding<S>::linearizationExcludes(const Box<S>& box) const {
       pj_[at(i, j, n)] = s;
       pjAbs_[at(i, j, n)] = sa;
     }
-  S migSq = 0;
   for (int i = 0; i < m; ++i) {
     S v = 0, va = 0, vr = 0;  // (P mu)_i, (|P| |mu|)_i, (|P| rho)_i
     for (int t = 0; t <= i; ++t) {
@@ -580,9 +612,18 @@ bool LinearizedBounding<S>::linearizationExcludes(const Box<S>& box) const {
     if (mig > reach * up) return true;
     migSq += mig * mig;
   }
+  return false;
+}
 
+template <class S>
+bool LinearizedBounding<S>::ballTestExcludes(const S& migSq, const S& hh) const {
   // 6. Ball test: |P J_c d|_2 <= |P J_c|_2 |d|_2 <= |P J_c|_2 |h|_2, with
   // |P J_c|_2 <= sqrt(|M M^T|_inf) + |E|_F for the computed M and its error bound E.
+  using std::abs;
+  using std::sqrt;
+  const int n = n_, m = m_;
+  const S& tol = tol_;
+  const S up = S(1) + tol;
   S gram = 0, errF = 0;
   for (int i = 0; i < m; ++i) {
     S row = 0;
@@ -598,11 +639,18 @@ bool LinearizedBounding<S>::linearizationExcludes(const Box<S>& box) const {
     for (int j = 0; j < n; ++j) errF += (tol * pjAbs_[at(i, j, n)]) * (tol * pjAbs_[at(i, j, n)]);
   }
   const S normBound = (sqrt(gram * up) + sqrt(errF * up)) * up;
-  if (migSq * (S(1) - tol) > normBound * normBound * hh * up) return true;
+  return migSq * (S(1) - tol) > normBound * normBound * hh * up;
+}
 
+template <class S>
+void LinearizedBounding<S>::kernelBounds() const {
   // 7. Null-space test. With J^+ = Q1 P (n x m) and D = I - J^+ J_c - N N^T, every solution
   // is d = -J^+ g + N t + D d with t = N^T d, so for every axis j
   // |(N t)_j - (J^+ mu)_j| <= h_j + (|J^+| rho)_j + (|D| h)_j =: b_j.
+  using std::abs;
+  const int n = n_, m = m_, k = n_ - m_;
+  const S& tol = tol_;
+  const S up = S(1) + tol;
   for (int j = 0; j < n; ++j)
     for (int t = 0; t < m; ++t) {
       S s = 0;
@@ -633,12 +681,19 @@ bool LinearizedBounding<S>::linearizationExcludes(const Box<S>& box) const {
     a_[j] = a;
     b_[j] = (h_[j] + ar + dh + tol * (2 * aa + ar + dh)) * up;
   }
+}
+
+template <class S>
+bool LinearizedBounding<S>::kernelPropagationExcludes() const {
   // Propagate the constraints on t over the box |t_p| <= sum_j |N_jp| h_j; for k = 1 a single
   // sweep intersects n intervals and is exact.
+  using std::abs;
+  const int n = n_, k = n_ - m_;
+  const S& tol = tol_;
   for (int p = 0; p < k; ++p) {
     S tau = 0;
     for (int j = 0; j < n; ++j) tau += abs(nul(j, p)) * h_[j];
-    thi_[p] = tau * up;
+    thi_[p] = tau * (S(1) + tol);
     tlo_[p] = -thi_[p];
   }
   const int sweeps = k <= 1 ? 1 : 3;
@@ -646,36 +701,45 @@ bool LinearizedBounding<S>::linearizationExcludes(const Box<S>& box) const {
     for (int j = 0; j < n; ++j) {
       bool free = true;  // no t enters axis j: the constraint is |a_j| <= b_j
       for (int p = 0; p < k; ++p) {
-        const S& nv = nul(j, p);
-        if (nv == 0) continue;
+        if (nul(j, p) == 0) continue;
         free = false;
-        // N_jp t_p lies in a_j +- b_j minus the other terms (interval product over the t box).
-        S restLo = 0, restHi = 0, restMag = 0;
-        for (int o = 0; o < k; ++o) {
-          if (o == p) continue;
-          const S& no = nul(j, o);
-          if (no >= 0) {
-            restLo += no * tlo_[o];
-            restHi += no * thi_[o];
-          } else {
-            restLo += no * thi_[o];
-            restHi += no * tlo_[o];
-          }
-          restMag += abs(no) * std::max(abs(tlo_[o]), abs(thi_[o]));
-        }
-        const S slack = tol * (abs(a_[j]) + b_[j] + restMag);
-        const S lo = a_[j] - b_[j] - restHi - slack, hi = a_[j] + b_[j] - restLo + slack;
-        S tl = (nv > 0 ? lo : hi) / nv, th = (nv > 0 ? hi : lo) / nv;
-        tl -= tol * abs(tl);
-        th += tol * abs(th);
-        if (tl > tlo_[p]) tlo_[p] = tl;
-        if (th < thi_[p]) thi_[p] = th;
-        if (tlo_[p] > thi_[p]) return true;
+        if (narrowKernelBox(j, p)) return true;
       }
       if (free && abs(a_[j]) - b_[j] > tol * (abs(a_[j]) + b_[j])) return true;
     }
   }
   return false;
+}
+
+template <class S>
+bool LinearizedBounding<S>::narrowKernelBox(int j, int p) const {
+  // N_jp t_p lies in a_j +- b_j minus the other terms (interval product over the t box);
+  // true when the t box becomes empty.
+  using std::abs;
+  const int k = n_ - m_;
+  const S& tol = tol_;
+  const S& nv = nul(j, p);
+  S restLo = 0, restHi = 0, restMag = 0;
+  for (int o = 0; o < k; ++o) {
+    if (o == p) continue;
+    const S& no = nul(j, o);
+    if (no >= 0) {
+      restLo += no * tlo_[o];
+      restHi += no * thi_[o];
+    } else {
+      restLo += no * thi_[o];
+      restHi += no * tlo_[o];
+    }
+    restMag += abs(no) * std::max(abs(tlo_[o]), abs(thi_[o]));
+  }
+  const S slack = tol * (abs(a_[j]) + b_[j] + restMag);
+  const S lo = a_[j] - b_[j] - restHi - slack, hi = a_[j] + b_[j] - restLo + slack;
+  S tl = (nv > 0 ? lo : hi) / nv, th = (nv > 0 ? hi : lo) / nv;
+  tl -= tol * abs(tl);
+  th += tol * abs(th);
+  if (tl > tlo_[p]) tlo_[p] = tl;
+  if (th < thi_[p]) thi_[p] = th;
+  return tlo_[p] > thi_[p];
 }
 
 // --- Factory -------------------------------------------------------------------------------------

@@ -167,6 +167,35 @@ class LinearizedBounding final {
   /// the value and the n partial derivatives, else with the value only. False when a divisor
   /// encloses 0 or a value is not finite.
   bool run(const std::vector<Op>& tape, std::span<const S> radius, bool gradient) const;
+  // The steps of linearizationExcludes (numbered as in the class comment), on the scratch
+  // buffers below.
+  /// 1: centre c_ and half-widths h_ of `box`; returns |h|_2^2 (rounded up).
+  S centreAndHalfWidths(const Box<S>& box) const;
+  /// 2: J_c (jac_), mid F(c) (mu_) and the radii rho_; false when an enclosure is not finite.
+  bool linearise() const;
+  /// 3: Householder QR of J_c^T into w_, beta_, diag_ and Q (q_); false when J_c is (nearly)
+  /// rank-deficient.
+  bool factorTranspose() const;
+  /// Applies reflector i (column i of w_) to the column `x` (n entries).
+  void reflect(int i, S* x) const;
+  /// 4: P = L^{-1} (p_) with L = R^T.
+  void invertLowerFactor() const;
+  /// 5: P J_c and the row test; adds each row's mig^2 to `migSq`; true when a row excludes.
+  bool rowTestExcludes(S& migSq) const;
+  /// 6: the ball test; true when it excludes.
+  bool ballTestExcludes(const S& migSq, const S& hh) const;
+  /// 7a: J^+ (pinv_) and the centre a_ and bound b_ of (N t)_j per axis.
+  void kernelBounds() const;
+  /// 7b: constraint propagation on the kernel coordinates t; true when no t is left.
+  bool kernelPropagationExcludes() const;
+  /// Narrows the box of t_p by the constraint of axis j; true when it becomes empty.
+  bool narrowKernelBox(int j, int p) const;
+  /// Q1 (row space of J_c) and N = Q2 (its kernel) as n x m and n x k matrices.
+  const S& q1(int row, int col) const {
+    return q_[static_cast<std::size_t>(col) * static_cast<std::size_t>(n_) +
+              static_cast<std::size_t>(row)];
+  }
+  const S& nul(int row, int col) const { return q1(row, m_ + col); }
   // Per run: the enclosures of each distinct leaf (dim + 1 midpoints and radii per leaf), and
   // whether they are computed yet (built expressions use the same leaves many times).
   mutable std::vector<S> leafMid_, leafRad_;
