@@ -339,6 +339,50 @@ TEST_CASE("Table 1 sets our counts beside the paper's and lists paper rows we la
         "paper's from 24.2% (sweep, Fig. 9(b)) to 69.2% (bisector, Fig. 8(b)).");
 }
 
+TEST_CASE("The paper's reference figures are read from a file; a bad one is a one-line error",
+          "[report]") {
+  const std::vector<std::map<std::string, std::string>> rows = {{{"run", "a"},
+                                                                 {"problem", "bisector-fig8b"},
+                                                                 {"n", "4"},
+                                                                 {"k", "2"},
+                                                                 {"cells.normal", "100"},
+                                                                 {"cells.abnormal", "300"},
+                                                                 {"cells.failed", "0"}}};
+  const CsvTable csv = parseCsv(experimentCsv("tab1-degeneracy", rows), "t1.csv");
+  const fs::path root = scratch() / "reference-file";
+  // The configs directory's sibling reference/ is used when it exists.
+  fs::create_directories(root / "configs");
+  spit(root / "reference" / "table1.toml",
+       "[[row]]\nkey = \"fig8b\"\nlabel = \"Bisector, Fig. 8(b)\"\nfamily = \"bisector\"\n"
+       "n = 4\nnormal = 10\nabnormal = 30\nshare = 75.0\n");
+  CHECK(referenceDir(root / "configs") == root / "reference");
+  const Artefact a = buildArtefact("tab1-degeneracy", csv, scratch(), root / "reference");
+  REQUIRE(a.tables.size() == 1);
+  REQUIRE(a.tables[0].rows.size() == 1);
+  CHECK(a.tables[0].rows[0].back() == "75.0");
+  // The repository's own file holds the paper's six examples.
+  CHECK(buildArtefact("tab1-degeneracy", csv, scratch(),
+                      fs::path(NDC_SOURCE_DIR) / "experiments" / "reference")
+            .tables[0]
+            .rows.size() == 6);
+  // Missing, not TOML, or a row without a number: InputError naming the file.
+  const auto error = [&](const fs::path& dir) {
+    try {
+      buildArtefact("tab1-degeneracy", csv, scratch(), dir);
+    } catch (const ndc::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  CHECK_THAT(error(root / "nowhere"),
+             Catch::Contains("table1.toml") && Catch::Contains("reference figures are missing"));
+  spit(root / "bad" / "table1.toml", "[[row]\nkey = 1\n");
+  CHECK_THAT(error(root / "bad"), Catch::Contains("table1.toml") && Catch::Contains("TOML"));
+  spit(root / "bad" / "table1.toml", "[[row]]\nkey = \"fig8a\"\nlabel = \"x\"\n");
+  CHECK_THAT(error(root / "bad"), Catch::Contains("row 1"));
+  CHECK(error(root / "bad").find('\n') == std::string::npos);
+}
+
 TEST_CASE("The report names failed runs and missing experiments and still writes", "[report]") {
   const fs::path results = scratch() / "failed" / "results";
   const fs::path configs = scratch() / "failed" / "configs";

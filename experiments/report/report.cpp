@@ -18,7 +18,10 @@
 #include <sstream>
 #include <system_error>
 
+#include <toml++/toml.h>
+
 #include "framework/core/problem.hpp"
+#include "framework/core/toml_reader.hpp"
 
 namespace ndc::report {
 namespace {
@@ -427,86 +430,6 @@ std::string renderGnuplot(const std::filesystem::path& dir, const std::string& i
   return "";
 }
 
-// --- Reading run outputs -----------------------------------------------------------------------
-
-PlyMesh readPly(const std::filesystem::path& file) {
-  std::istringstream in(readText(file));
-  const auto fail = [&](const std::string& message) {
-    throw InputError(file.string() + ": " + message);
-  };
-  std::string line;
-  if (!std::getline(in, line) || line != "ply") fail("not a PLY file");
-  struct Element {
-    std::string name;
-    std::size_t count = 0;
-    std::vector<std::string> properties;
-    bool list = false;
-  };
-  std::vector<Element> elements;
-  bool ascii = false;
-  while (std::getline(in, line)) {
-    std::istringstream words(line);
-    std::string word;
-    words >> word;
-    if (word == "end_header") break;
-    if (word == "format") {
-      std::string format;
-      words >> format;
-      ascii = format == "ascii";
-    } else if (word == "element") {
-      Element e;
-      words >> e.name >> e.count;
-      elements.push_back(e);
-    } else if (word == "property") {
-      if (elements.empty()) fail("property before element");
-      std::string type, name;
-      words >> type;
-      if (type == "list") {
-        std::string countType, itemType;
-        words >> countType >> itemType;
-        elements.back().list = true;
-      }
-      words >> name;
-      elements.back().properties.push_back(name);
-    }
-  }
-  if (!ascii) fail("only ASCII PLY is read");
-  PlyMesh mesh;
-  for (const Element& e : elements) {
-    for (std::size_t i = 0; i < e.count; ++i) {
-      if (!std::getline(in, line)) fail("ends inside element '" + e.name + "'");
-      std::istringstream words(line);
-      if (e.name == "vertex") {
-        std::map<std::string, double> value;
-        for (const std::string& p : e.properties) {
-          double v = 0;
-          if (!(words >> v)) fail("bad vertex line: " + line);
-          value[p] = v;
-        }
-        if (!value.count("x") || !value.count("y") || !value.count("z"))
-          fail("vertex lacks x, y or z");
-        mesh.xyz.push_back({value["x"], value["y"], value["z"]});
-        std::vector<double> u;
-        for (int j = 0; value.count("u" + std::to_string(j)); ++j)
-          u.push_back(value["u" + std::to_string(j)]);
-        mesh.u.push_back(std::move(u));
-      } else if (e.name == "edge" || e.name == "face") {
-        std::vector<int> s;
-        int count = 2;
-        if (e.list && !(words >> count)) fail("bad " + e.name + " line: " + line);
-        for (int j = 0; j < count; ++j) {
-          int v = 0;
-          if (!(words >> v) || v < 0 || static_cast<std::size_t>(v) >= mesh.xyz.size())
-            fail("bad " + e.name + " line: " + line);
-          s.push_back(v);
-        }
-        mesh.simplices.push_back(std::move(s));
-      }
-    }
-  }
-  return mesh;
-}
-
 // --- Artefacts ---------------------------------------------------------------------------------
 
 namespace {
@@ -515,13 +438,6 @@ namespace {
 const std::vector<std::string> kSettingColumns = {"depth",      "bounding",       "subdivision",
                                                   "projection", "classification", "connection",
                                                   "scalar",     "precision_bits"};
-
-constexpr std::array<std::string_view, 8> kKnownArtefacts = {
-    "tab1-degeneracy",       "fig-degeneracy-vs-n",
-    "tab-ablation-bounding", "tab-ablation-subdivision",
-    "tab-ablation-scalar",   "tab-connection",
-    "fig-convergence",       "fig-cells"};
-const std::array<std::string_view, 8>& knownList() { return kKnownArtefacts; }
 
 std::string join(const std::vector<std::string>& parts, std::string_view separator) {
   std::string out;
@@ -606,26 +522,6 @@ void requireRunColumns(const CsvTable& t) {
   requireColumns(t, {"experiment", "run", "problem", "status", "error"});
 }
 
-// --- tab1-degeneracy: the paper's Table 1 ------------------------------------------------------
-
-struct PaperRow {
-  std::string_view key;    ///< matched against the normalised problem name and file stem
-  std::string_view label;  ///< the paper's example
-  std::string_view family;
-  int n;
-  double normal, abnormal, share;
-};
-
-// Seong, Elber and Kim (2005), Table 1: solution points of Figures 8-10.
-constexpr std::array<PaperRow, 6> kPaperTable1 = {{
-    {"fig8a", "Bisector, Fig. 8(a)", "bisector", 4, 444, 306, 40.8},
-    {"fig8b", "Bisector, Fig. 8(b)", "bisector", 4, 484, 1088, 69.2},
-    {"fig8c", "Bisector, Fig. 8(c)", "bisector", 4, 735, 281, 27.6},
-    {"fig9", "Sweep, Fig. 9(b)", "sweep", 3, 570, 182, 24.2},
-    {"fig10a", "Blending, Fig. 10(a)", "blending", 6, 1054, 1530, 59.2},
-    {"fig10b", "Blending, Fig. 10(b)", "blending", 6, 918, 1465, 61.4},
-}};
-
 std::string normalised(std::string_view text) {
   std::string out;
   for (char c : text)
@@ -634,41 +530,285 @@ std::string normalised(std::string_view text) {
   return out;
 }
 
-int paperRowOf(const CsvTable& t, std::size_t r) {
+// --- tab1-degeneracy: the paper's Table 1 ------------------------------------------------------
+
+/// One example of the paper's Table 1, as read from `<reference>/table1.toml`.
+struct PaperRow {
+  std::string key;        ///< matched against the normalised problem name and file stem
+  std::string label;      ///< the paper's example, e.g. "Bisector, Fig. 8(a)"
+  std::string family;     ///< the application: bisector, sweep or blending
+  std::string highlight;  ///< optional: how the sentences name a row the paper singles out
+  int n = 0;
+  double normal = 0, abnormal = 0, share = 0;
+};
+
+/// A string of a reference row; throws InputError naming the file, row and key.
+std::string referenceString(const toml::table& row, const std::string& where, const char* key,
+                            bool required) {
+  const toml::node* node = row.get(key);
+  if (!node && !required) return "";
+  const std::optional<std::string> value = node ? node->value<std::string>() : std::nullopt;
+  if (!value || value->empty())
+    throw InputError(where + ": '" + key + "' must be a non-empty string");
+  return *value;
+}
+
+/// A number >= 0 of a reference row; throws InputError naming the file, row and key.
+double referenceNumber(const toml::table& row, const std::string& where, const char* key) {
+  const toml::node* node = row.get(key);
+  const std::optional<double> value = node ? node->value<double>() : std::nullopt;
+  if (!value || !std::isfinite(*value) || *value < 0)
+    throw InputError(where + ": '" + key + "' must be a number >= 0");
+  return *value;
+}
+
+/// One `[[row]]` of table1.toml.
+PaperRow paperRowFrom(const toml::node& node, const std::string& where) {
+  const toml::table* row = node.as_table();
+  if (!row) throw InputError(where + ": not a table");
+  PaperRow p;
+  p.key = normalised(referenceString(*row, where, "key", true));
+  p.label = referenceString(*row, where, "label", true);
+  p.family = referenceString(*row, where, "family", true);
+  p.highlight = referenceString(*row, where, "highlight", false);
+  const toml::node* n = row->get("n");
+  const std::optional<std::int64_t> dimension = n ? n->value<std::int64_t>() : std::nullopt;
+  if (!dimension || *dimension < 1 || *dimension > 1000)
+    throw InputError(where + ": 'n' must be an integer 1..1000");
+  p.n = static_cast<int>(*dimension);
+  p.normal = referenceNumber(*row, where, "normal");
+  p.abnormal = referenceNumber(*row, where, "abnormal");
+  p.share = referenceNumber(*row, where, "share");
+  return p;
+}
+
+/// The paper's Table 1 from `<reference>/table1.toml` (a `[[row]]` per example, in the paper's
+/// order). Throws InputError (one line, naming the file) when it is missing or malformed.
+std::vector<PaperRow> loadPaperTable1(const std::filesystem::path& reference) {
+  const std::filesystem::path file = reference / "table1.toml";
+  const std::string name = file.string();
+  if (!std::filesystem::is_regular_file(file))
+    throw InputError(name + ": the paper's reference figures are missing");
+  const std::string text = readText(file);
+  const toml::table top = parseTomlText(text, name);
+  const toml::array* rows = top["row"].as_array();
+  if (!rows || rows->empty()) throw InputError(name + ": no [[row]] of the paper's Table 1");
+  std::vector<PaperRow> table;
+  for (std::size_t i = 0; i < rows->size(); ++i) {
+    table.push_back(paperRowFrom((*rows)[i], name + ": row " + std::to_string(i + 1)));
+    for (std::size_t j = 0; j + 1 < table.size(); ++j)
+      if (table[j].key == table.back().key)
+        throw InputError(name + ": row " + std::to_string(i + 1) + ": duplicate key '" +
+                         table.back().key + "'");
+  }
+  return table;
+}
+
+/// "sweep, Fig. 9(b)" for the label "Sweep, Fig. 9(b)": the family, then what follows the
+/// label's first comma (the whole label when it has none).
+std::string paperExample(const PaperRow& p) {
+  const std::size_t comma = p.label.find(',');
+  return comma == std::string::npos ? p.label : p.family + p.label.substr(comma);
+}
+
+/// The paper's row a result row stands in for (-1: none).
+int paperRowOf(const std::vector<PaperRow>& paper, const CsvTable& t, std::size_t r) {
   const std::string name =
       normalised(t.cell(r, "problem")) + " " +
       normalised(std::filesystem::path(t.cell(r, "problem_file")).stem().string());
   // Longest key first so that "fig10a" is not taken for a shorter key.
   int best = -1;
-  for (std::size_t i = 0; i < kPaperTable1.size(); ++i) {
-    const std::string key(kPaperTable1[i].key);
+  for (std::size_t i = 0; i < paper.size(); ++i) {
+    const std::string& key = paper[i].key;
     std::size_t at = name.find(key);
     while (at != std::string::npos) {
       const std::size_t end = at + key.size();
       // "fig9" must not match "fig9x..." where a letter continues the figure label.
       const bool whole = end >= name.size() ||
                          !std::isalpha(static_cast<unsigned char>(name[end])) || key.back() >= 'a';
-      if (whole && (best < 0 || key.size() > kPaperTable1[best].key.size()))
-        best = static_cast<int>(i);
+      if (whole && (best < 0 || key.size() > paper[best].key.size())) best = static_cast<int>(i);
       at = name.find(key, at + 1);
     }
   }
   return best;
 }
 
-Artefact tab1Degeneracy(const std::string& id, const CsvTable& t) {
+/// One of our results set beside the paper's row `paper` (-1: not in the paper).
+struct Ours {
+  std::string problem;
+  int paper;
+  double normal, abnormal, share, failed;
+};
+
+/// Builds tab1-degeneracy's table row by row and collects our figures for the sentences.
+class Table1Rows {
+ public:
+  Table1Rows(const CsvTable& t, const std::vector<PaperRow>& paper,
+             const std::vector<std::string>& vary, Table& table)
+      : t_(t), paper_(paper), vary_(vary), table_(table) {}
+
+  /// Adds the row of group `g` (nullptr: the paper's example without a result of ours).
+  void add(const Group* g, int paper) {
+    std::vector<std::string> row;
+    row.push_back(paper >= 0 ? paper_[paper].label : "(not in the paper)");
+    if (g) {
+      ours(*g, paper, row);
+    } else {
+      row.push_back("(no result)");
+      row.push_back(paper >= 0 ? std::to_string(paper_[paper].n) : "");
+      for (std::size_t c = 0; c < (vary_.empty() ? 4u : 5u); ++c) row.push_back(std::string(kDash));
+    }
+    if (paper >= 0) {
+      row.push_back(formatNumber(paper_[paper].normal));
+      row.push_back(formatNumber(paper_[paper].abnormal));
+      row.push_back(formatFixed(paper_[paper].share, 1));
+    } else {
+      for (int c = 0; c < 3; ++c) row.push_back(std::string(kDash));
+    }
+    table_.rows.push_back(std::move(row));
+  }
+
+  std::vector<Ours> results;  ///< our groups, in table order
+
+ private:
+  void ours(const Group& g, int paper, std::vector<std::string>& row) {
+    const std::size_t r0 = g.rows.front();
+    const double normal = meanOf(t_, g.rows, "cells.normal");
+    const double abnormal = meanOf(t_, g.rows, "cells.abnormal");
+    results.push_back({t_.cell(r0, "problem"), paper, normal, abnormal,
+                       abnormalShare(normal, abnormal), meanOf(t_, g.rows, "cells.failed")});
+    row.push_back(t_.cell(r0, "problem"));
+    row.push_back(t_.cell(r0, "n"));
+    row.push_back(t_.cell(r0, "depth"));
+    if (!vary_.empty()) row.push_back(settingsLabel(t_, r0, vary_));
+    row.push_back(formatNumber(std::round(normal)));
+    row.push_back(formatNumber(std::round(abnormal)));
+    row.push_back(formatFixed(abnormalShare(normal, abnormal), 1));
+  }
+
+  const CsvTable& t_;
+  const std::vector<PaperRow>& paper_;
+  const std::vector<std::string>& vary_;
+  Table& table_;
+};
+
+/// The paper's rows with the lowest and highest abnormal share (first of equals).
+std::pair<const PaperRow*, const PaperRow*> paperShareRange(const std::vector<PaperRow>& paper) {
+  const auto byShare = [](const PaperRow& x, const PaperRow& y) { return x.share < y.share; };
+  return {&*std::min_element(paper.begin(), paper.end(), byShare),
+          &*std::max_element(paper.begin(), paper.end(), byShare)};
+}
+
+/// "Mean abnormal share by application: ...", the families in order of their dimension n.
+std::string familySentence(const std::vector<PaperRow>& paper, const std::vector<Ours>& ours) {
+  std::vector<const PaperRow*> firsts;  // the first row of each family, by n
+  for (const PaperRow& p : paper)
+    if (std::none_of(firsts.begin(), firsts.end(),
+                     [&](const PaperRow* f) { return f->family == p.family; }))
+      firsts.push_back(&p);
+  std::stable_sort(firsts.begin(), firsts.end(),
+                   [](const PaperRow* x, const PaperRow* y) { return x->n < y->n; });
+  std::vector<std::string> families, paperFamilies;
+  for (const PaperRow* f : firsts) {
+    std::vector<double> mine, theirs;
+    int n = 0;
+    for (const Ours& o : ours)
+      if (o.paper >= 0 && paper[o.paper].family == f->family) mine.push_back(o.share);
+    for (const PaperRow& p : paper)
+      if (p.family == f->family) theirs.push_back(p.share), n = p.n;
+    if (mine.empty()) continue;
+    families.push_back(f->family + " (n = " + std::to_string(n) + ") " +
+                       percent(summarize(mine).mean));
+    paperFamilies.push_back(percent(summarize(theirs).mean));
+  }
+  if (families.empty()) return "";
+  return "Mean abnormal share by application: " + join(families, ", ") +
+         "; the paper: " + join(paperFamilies, ", ") + ".";
+}
+
+/// For each row the paper singles out (`highlight`, e.g. Fig. 8(b), the highest bisector
+/// share): whether ours is also the highest of its family.
+void highlightSentences(const std::vector<PaperRow>& paper, const std::vector<Ours>& ours,
+                        std::vector<std::string>& sentences) {
+  const auto shareOf = [&](std::size_t row) {
+    for (const Ours& o : ours)
+      if (o.paper == static_cast<int>(row)) return o.share;
+    return kNaN;
+  };
+  for (std::size_t h = 0; h < paper.size(); ++h) {
+    const double b = shareOf(h);
+    if (paper[h].highlight.empty() || !std::isfinite(b)) continue;
+    bool highest = true;
+    for (std::size_t o = 0; o < paper.size(); ++o)
+      if (o != h && paper[o].family == paper[h].family)
+        highest = highest && b >= shareOf(o) - 1e-9 && !(b < shareOf(o));
+    const std::size_t comma = paper[h].label.find(", ");
+    const std::string figure =
+        comma == std::string::npos ? paper[h].label : paper[h].label.substr(comma + 2);
+    sentences.push_back("The " + paper[h].highlight + " of " + figure + " has " + percent(b) +
+                        (highest
+                             ? ", the highest " + paper[h].family + " share, as in the paper."
+                             : ", not the highest " + paper[h].family +
+                                   " share, unlike the paper (" + percent(paper[h].share) + ")."));
+  }
+}
+
+/// What tab1-degeneracy shows: our range beside the paper's, by family, the highlighted rows,
+/// the cell count ratio and the failed cells.
+std::vector<std::string> table1Sentences(const std::vector<PaperRow>& paper,
+                                         const std::vector<Ours>& ours) {
+  const auto [paperLo, paperHi] = paperShareRange(paper);
+  if (ours.empty())
+    return {"No run succeeded, so there is nothing to set beside the paper's figures (" +
+            formatFixed(paperLo->share, 1) + "% to " + percent(paperHi->share) + " abnormal)."};
+  std::vector<std::string> sentences;
+  // Our range beside the paper's.
+  const auto byShare = [](const Ours& x, const Ours& y) { return x.share < y.share; };
+  const auto lo = std::min_element(ours.begin(), ours.end(), byShare);
+  const auto hi = std::max_element(ours.begin(), ours.end(), byShare);
+  sentences.push_back("Our abnormal share ranges from " + percent(lo->share) + " (" + lo->problem +
+                      ") to " + percent(hi->share) + " (" + hi->problem + "); the paper's from " +
+                      percent(paperLo->share) + " (" + paperExample(*paperLo) + ") to " +
+                      percent(paperHi->share) + " (" + paperExample(*paperHi) + ").");
+  // By application, and the rows the paper singles out.
+  if (std::string family = familySentence(paper, ours); !family.empty())
+    sentences.push_back(std::move(family));
+  highlightSentences(paper, ours, sentences);
+  // Cell counts against the paper's.
+  std::vector<std::pair<double, double>> totals;
+  for (const Ours& o : ours)
+    if (o.paper >= 0)
+      totals.emplace_back(o.normal + o.abnormal, paper[o.paper].normal + paper[o.paper].abnormal);
+  const double ratio = geometricMeanRatio(totals);
+  if (std::isfinite(ratio))
+    sentences.push_back(
+        "Our problems are our own stand-ins for the paper's freeform surfaces "
+        "and the paper gives no depth, so the cell counts differ: ours are " +
+        formatFixed(ratio, 2) + " times the paper's (geometric mean).");
+  // Cells left out of the shares.
+  double failedCells = 0;
+  for (const Ours& o : ours) failedCells += o.failed;
+  if (failedCells > 0)
+    sentences.push_back("Cells whose Newton projection failed (" + formatNumber(failedCells) +
+                        " in all; the paper has no such class) are left out of the shares.");
+  return sentences;
+}
+
+Artefact tab1Degeneracy(const std::string& id, const CsvTable& t,
+                        const std::vector<PaperRow>& paper) {
   requireRunColumns(t);
   requireColumns(t,
                  {"problem_file", "n", "depth", "cells.normal", "cells.abnormal", "cells.failed"});
   Artefact a;
   a.id = id;
   a.title = "Table 1 reproduced: normal and abnormal solution cells";
+  // One group per problem, depth and varying setting.
   const std::vector<std::string> vary = without(varyingColumns(t, kSettingColumns), {"depth"});
   std::vector<std::string> keys = {"problem", "depth"};
   keys.insert(keys.end(), vary.begin(), vary.end());
-  const std::vector<std::size_t> ok = okRows(t);
-  const std::vector<Group> groups = groupBy(t, keys, ok);
+  const std::vector<Group> groups = groupBy(t, keys, okRows(t));
 
+  // The table's header.
   Table table;
   table.id = id;
   table.caption =
@@ -681,278 +821,301 @@ Artefact tab1Degeneracy(const std::string& id, const CsvTable& t) {
     table.columns.push_back(c);
   table.align = std::string(vary.empty() ? "llrr" : "llrrl") + "rrrrrr";
 
-  struct Ours {
-    std::string problem;
-    int paper;
-    double normal, abnormal, share, failed;
-  };
-  std::vector<Ours> ours;
-  const auto addRow = [&](const Group* g, int paper) {
-    std::vector<std::string> row;
-    row.push_back(paper >= 0 ? std::string(kPaperTable1[paper].label) : "(not in the paper)");
-    if (g) {
-      const std::size_t r0 = g->rows.front();
-      const double normal = meanOf(t, g->rows, "cells.normal");
-      const double abnormal = meanOf(t, g->rows, "cells.abnormal");
-      ours.push_back({t.cell(r0, "problem"), paper, normal, abnormal,
-                      abnormalShare(normal, abnormal), meanOf(t, g->rows, "cells.failed")});
-      row.push_back(t.cell(r0, "problem"));
-      row.push_back(t.cell(r0, "n"));
-      row.push_back(t.cell(r0, "depth"));
-      if (!vary.empty()) row.push_back(settingsLabel(t, r0, vary));
-      row.push_back(formatNumber(std::round(normal)));
-      row.push_back(formatNumber(std::round(abnormal)));
-      row.push_back(formatFixed(abnormalShare(normal, abnormal), 1));
-    } else {
-      row.push_back("(no result)");
-      row.push_back(paper >= 0 ? std::to_string(kPaperTable1[paper].n) : "");
-      for (std::size_t c = 0; c < (vary.empty() ? 4u : 5u); ++c) row.push_back(std::string(kDash));
-    }
-    if (paper >= 0) {
-      row.push_back(formatNumber(kPaperTable1[paper].normal));
-      row.push_back(formatNumber(kPaperTable1[paper].abnormal));
-      row.push_back(formatFixed(kPaperTable1[paper].share, 1));
-    } else {
-      for (int c = 0; c < 3; ++c) row.push_back(std::string(kDash));
-    }
-    table.rows.push_back(std::move(row));
-  };
   // The paper's order, then our problems that are not in the paper.
+  Table1Rows rows(t, paper, vary, table);
   std::vector<bool> used(groups.size(), false);
-  for (std::size_t p = 0; p < kPaperTable1.size(); ++p) {
+  for (std::size_t p = 0; p < paper.size(); ++p) {
     bool any = false;
     for (std::size_t g = 0; g < groups.size(); ++g)
-      if (paperRowOf(t, groups[g].rows.front()) == static_cast<int>(p)) {
-        addRow(&groups[g], static_cast<int>(p));
+      if (paperRowOf(paper, t, groups[g].rows.front()) == static_cast<int>(p)) {
+        rows.add(&groups[g], static_cast<int>(p));
         used[g] = any = true;
       }
-    if (!any) addRow(nullptr, static_cast<int>(p));
+    if (!any) rows.add(nullptr, static_cast<int>(p));
   }
   for (std::size_t g = 0; g < groups.size(); ++g)
-    if (!used[g]) addRow(&groups[g], -1);
+    if (!used[g]) rows.add(&groups[g], -1);
   a.tables.push_back(std::move(table));
 
   // What it shows.
-  if (ours.empty()) {
-    a.sentences.push_back(
-        "No run succeeded, so there is nothing to set beside the paper's "
-        "figures (24.2% to 69.2% abnormal).");
-    return a;
-  }
-  const auto lo = std::min_element(ours.begin(), ours.end(),
-                                   [](auto& x, auto& y) { return x.share < y.share; });
-  const auto hi = std::max_element(ours.begin(), ours.end(),
-                                   [](auto& x, auto& y) { return x.share < y.share; });
-  a.sentences.push_back("Our abnormal share ranges from " + percent(lo->share) + " (" +
-                        lo->problem + ") to " + percent(hi->share) + " (" + hi->problem +
-                        "); the paper's from 24.2% (sweep, Fig. 9(b)) to 69.2% (bisector, "
-                        "Fig. 8(b)).");
-  std::vector<std::string> families;
-  std::vector<std::string> paperFamilies;
-  for (std::string_view family : {"sweep", "bisector", "blending"}) {
-    std::vector<double> mine, theirs;
-    int n = 0;
-    for (const Ours& o : ours)
-      if (o.paper >= 0 && kPaperTable1[o.paper].family == family) mine.push_back(o.share);
-    for (const PaperRow& p : kPaperTable1)
-      if (p.family == family) theirs.push_back(p.share), n = p.n;
-    if (mine.empty()) continue;
-    families.push_back(std::string(family) + " (n = " + std::to_string(n) + ") " +
-                       percent(summarize(mine).mean));
-    paperFamilies.push_back(percent(summarize(theirs).mean));
-  }
-  if (!families.empty())
-    a.sentences.push_back("Mean abnormal share by application: " + join(families, ", ") +
-                          "; the paper: " + join(paperFamilies, ", ") + ".");
-  // The paper's ordering claims: blending (n = 6) above bisectors (n = 4), Fig. 8(b) highest
-  // of the bisectors.
-  const auto shareOf = [&](int paper) {
-    for (const Ours& o : ours)
-      if (o.paper == paper) return o.share;
-    return kNaN;
-  };
-  const double b = shareOf(1);
-  if (std::isfinite(b)) {
-    const bool highest = std::isfinite(b) && b >= shareOf(0) - 1e-9 && b >= shareOf(2) - 1e-9 &&
-                         !(b < shareOf(0)) && !(b < shareOf(2));
-    a.sentences.push_back(std::string("The self-intersecting bisector of Fig. 8(b) has ") +
-                          percent(b) +
-                          (highest ? ", the highest bisector share, as in the paper."
-                                   : ", not the highest bisector share, unlike "
-                                     "the paper (69.2%)."));
-  }
-  std::vector<std::pair<double, double>> totals;
-  for (const Ours& o : ours)
-    if (o.paper >= 0)
-      totals.emplace_back(o.normal + o.abnormal,
-                          kPaperTable1[o.paper].normal + kPaperTable1[o.paper].abnormal);
-  const double ratio = geometricMeanRatio(totals);
-  if (std::isfinite(ratio))
-    a.sentences.push_back(
-        "Our problems are our own stand-ins for the paper's freeform surfaces "
-        "and the paper gives no depth, so the cell counts differ: ours are " +
-        formatFixed(ratio, 2) + " times the paper's (geometric mean).");
-  double failedCells = 0;
-  for (const Ours& o : ours) failedCells += o.failed;
-  if (failedCells > 0)
-    a.sentences.push_back("Cells whose Newton projection failed (" + formatNumber(failedCells) +
-                          " in all; the paper has no such class) are left out of the shares.");
+  a.sentences = table1Sentences(paper, rows.results);
   return a;
 }
 
 // --- fig-degeneracy-vs-n -----------------------------------------------------------------------
 
-Artefact figDegeneracyVsN(const std::string& id, const CsvTable& t) {
+/// The state of fig-degeneracy-vs-n while its series are added.
+struct DegeneracyPlot {
+  Table data;                        ///< per series and n: the share's statistics
+  GnuplotScript gp;                  ///< the figure
+  std::vector<std::string> plots;    ///< the plot clauses
+  int nMin = 100, nMax = 0;          ///< the range of n
+  std::map<int, double> sphereMean;  ///< mean share per n of the first k = 2 series
+};
+
+/// The share's statistics at one n of a series: adds the table row, the mean (with min, max,
+/// sd) to `means`, every run to `points`; returns the statistics.
+Stats degeneracyAtN(const CsvTable& t, const Group& series, const Group& cell,
+                    const std::vector<std::string>& vary, DegeneracyPlot& plot,
+                    std::vector<std::vector<double>>& means,
+                    std::vector<std::vector<double>>& points) {
+  std::vector<double> share;
+  std::set<std::string> depths;
+  const int n = std::stoi(cell.key[0]);
+  for (std::size_t r : cell.rows) {
+    share.push_back(abnormalShare(t.number(r, "cells.normal"), t.number(r, "cells.abnormal")));
+    points.push_back({n + 0.0, share.back()});
+    depths.insert(t.cell(r, "depth"));
+  }
+  const Stats st = summarize(share);
+  means.push_back({n + 0.0, st.mean, st.min, st.max, st.stddev});
+  plot.nMin = std::min(plot.nMin, n);
+  plot.nMax = std::max(plot.nMax, n);
+  std::vector<std::string> row = {series.key[0],
+                                  cell.key[0],
+                                  join({depths.begin(), depths.end()}, "/"),
+                                  std::to_string(st.count),
+                                  formatFixed(st.mean, 1),
+                                  formatFixed(st.stddev, 1),
+                                  formatFixed(st.min, 1),
+                                  formatFixed(st.max, 1)};
+  if (!vary.empty()) row.insert(row.begin() + 1, settingsLabel(t, series.rows[0], vary));
+  plot.data.rows.push_back(std::move(row));
+  return st;
+}
+
+/// What a series shows: first to last n, whether every step goes up, and the paper's claim.
+void degeneracySentences(const std::string& label, const std::string& k,
+                         const std::vector<std::pair<int, double>>& trend, double widest,
+                         std::vector<std::string>& sentences) {
+  std::string sentence =
+      "For " + label + " the abnormal share " +
+      (trend.back().second >= trend.front().second ? "rises" : "falls") + " from " +
+      percent(trend.front().second) + " at n = " + std::to_string(trend.front().first) + " to " +
+      percent(trend.back().second) + " at n = " + std::to_string(trend.back().first);
+  std::vector<std::string> drops;
+  for (std::size_t i = 1; i < trend.size(); ++i)
+    if (trend[i].second < trend[i - 1].second)
+      drops.push_back(std::to_string(trend[i - 1].first) + " to " + std::to_string(trend[i].first));
+  if (trend.size() > 2)
+    sentence += drops.empty() ? ", increasing at every step"
+                              : ", not monotonically (it drops from n = " + join(drops, ", ") + ")";
+  sentence += "; the seeds spread it by up to " + formatFixed(widest, 1) + " points.";
+  sentences.push_back(sentence);
+  if (trend.size() > 1)
+    sentences.push_back(
+        trend.back().second > trend.front().second
+            ? "This agrees with the paper's observation (Sec. 5, Table 1) that degeneracies "
+              "become more likely in higher dimensions (k = " +
+                  k + ")."
+            : "This differs from the paper's observation (Sec. 5) that degeneracies become "
+              "more likely in higher dimensions (k = " +
+                  k + ").");
+}
+
+/// Series `s` (one k and varying settings): its rows, curves and sentences.
+void degeneracySeries(const CsvTable& t, const Group& g, std::size_t s,
+                      const std::vector<std::string>& vary, DegeneracyPlot& plot,
+                      std::vector<std::string>& sentences) {
+  static const char* colours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b"};
+  const std::string k = g.key[0];
+  const std::string label =
+      "k = " + k + (vary.empty() ? "" : ", " + settingsLabel(t, g.rows[0], vary));
+  // The statistics per n, in increasing n.
+  std::vector<std::vector<double>> means, points;
+  std::vector<std::pair<int, double>> trend;
+  std::vector<std::string> nKey = {"n"};
+  std::vector<Group> byN = groupBy(t, nKey, g.rows);
+  std::sort(byN.begin(), byN.end(), [](const Group& x, const Group& y) {
+    return std::stoi(x.key[0]) < std::stoi(y.key[0]);
+  });
+  double widest = 0;
+  for (const Group& cell : byN) {
+    const Stats st = degeneracyAtN(t, g, cell, vary, plot, means, points);
+    trend.emplace_back(std::stoi(cell.key[0]), st.mean);
+    widest = std::max(widest, st.max - st.min);
+  }
+  if (k == "2" && plot.sphereMean.empty())
+    for (const auto& [n, mean] : trend) plot.sphereMean[n] = mean;
+  // The curves: means with min-max bars, and every run.
+  const std::string name = "s" + std::to_string(s);
+  plot.gp.data(name + "mean", means);
+  plot.gp.data(name + "runs", points);
+  const std::string colour = colours[s % 6];
+  plot.plots.push_back("$" + name + "mean using 1:2:3:4 with yerrorlines lw 2 pt 7 lc rgb \"" +
+                       colour + "\" title \"" + label + ": mean, min-max\"");
+  plot.plots.push_back("$" + name + "runs using ($1+0.08):2 with points pt 6 ps 0.6 lc rgb \"" +
+                       colour + "\" title \"" + label + ": runs\"");
+  if (!trend.empty()) degeneracySentences(label, k, trend, widest, sentences);
+}
+
+/// The paper's Table 1 (surfaces, k = 2, freeform inputs) at its dimensions, for reference:
+/// points in the figure and, beside our first k = 2 series, a sentence.
+void degeneracyPaper(const std::vector<PaperRow>& paper, DegeneracyPlot& plot,
+                     std::vector<std::string>& sentences) {
+  std::vector<std::vector<double>> paperPoints;
+  std::map<int, std::vector<double>> paperByN;
+  for (const PaperRow& p : paper) {
+    paperPoints.push_back({p.n + 0.0, p.share});
+    paperByN[p.n].push_back(p.share);
+  }
+  plot.gp.data("paper", paperPoints);
+  plot.plots.push_back(
+      "$paper with points pt 2 ps 1.5 lw 2 lc rgb \"black\" title \"paper, Table 1 "
+      "(k = 2, freeform inputs)\"");
+  if (plot.sphereMean.empty()) return;
+  std::vector<std::string> ours, theirs;
+  for (const auto& [n, shares] : paperByN) {
+    const Stats p = summarize(shares);
+    theirs.push_back(p.count > 1 ? formatFixed(p.min, 1) + "-" + formatFixed(p.max, 1) +
+                                       "% at n = " + std::to_string(n)
+                                 : percent(p.mean) + " at n = " + std::to_string(n));
+    const auto it = plot.sphereMean.find(n);
+    ours.push_back(it != plot.sphereMean.end() ? percent(it->second) : std::string("not run"));
+  }
+  sentences.push_back("The paper's Table 1 (surfaces from freeform inputs) has " +
+                      join(theirs, ", ") + "; our rotated spheres give " + join(ours, ", ") +
+                      " there.");
+}
+
+Artefact figDegeneracyVsN(const std::string& id, const CsvTable& t,
+                          const std::vector<PaperRow>& paper) {
   requireRunColumns(t);
   requireColumns(t, {"n", "k", "depth", "cells.normal", "cells.abnormal"});
   Artefact a;
   a.id = id;
   a.figure = true;
   a.title = "Abnormal share against the ambient dimension n";
+  // One series per k and varying setting.
   const std::vector<std::string> vary = without(varyingColumns(t, kSettingColumns), {"depth"});
   std::vector<std::string> seriesKeys = {"k"};
   seriesKeys.insert(seriesKeys.end(), vary.begin(), vary.end());
-  const std::vector<std::size_t> ok = okRows(t);
 
-  Table data;
-  data.id = id;
-  data.caption =
+  // The data table's header and the script's settings.
+  DegeneracyPlot plot{Table{}, GnuplotScript(id), {}, 100, 0, {}};
+  plot.data.id = id;
+  plot.data.caption =
       "Abnormal share (% of classified cells) per n: mean, standard deviation, "
       "minimum and maximum over the seeds.";
-  data.columns = {"k", "n", "depth", "runs", "mean %", "sd", "min %", "max %"};
-  data.align = "rrrrrrrr";
+  plot.data.columns = {"k", "n", "depth", "runs", "mean %", "sd", "min %", "max %"};
+  plot.data.align = "rrrrrrrr";
   if (!vary.empty()) {
-    data.columns.insert(data.columns.begin() + 1, "settings");
-    data.align.insert(1, "l");
+    plot.data.columns.insert(plot.data.columns.begin() + 1, "settings");
+    plot.data.align.insert(1, "l");
   }
+  for (const char* line :
+       {"set xlabel \"ambient dimension n\"", "set ylabel \"abnormal cells (% of classified)\"",
+        "set key top left", "set grid", "set xtics 1", "set yrange [0:*]"})
+    plot.gp.command(line);
 
-  GnuplotScript gp(id);
-  gp.command("set xlabel \"ambient dimension n\"");
-  gp.command("set ylabel \"abnormal cells (% of classified)\"");
-  gp.command("set key top left");
-  gp.command("set grid");
-  gp.command("set xtics 1");
-  gp.command("set yrange [0:*]");
-  std::vector<std::string> plots;
-  int nMin = 100, nMax = 0;
-  const char* colours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b"};
-  const std::vector<Group> series = groupBy(t, seriesKeys, ok);
-  std::map<int, double> sphereMean;  // mean share per n of the first k = 2 series
-  for (std::size_t s = 0; s < series.size(); ++s) {
-    const Group& g = series[s];
-    const std::string k = g.key[0];
-    const std::string label =
-        "k = " + k + (vary.empty() ? "" : ", " + settingsLabel(t, g.rows[0], vary));
-    std::vector<std::vector<double>> means, points;
-    std::vector<std::pair<int, double>> trend;
-    std::vector<std::string> nKey = {"n"};
-    std::vector<Group> byN = groupBy(t, nKey, g.rows);
-    std::sort(byN.begin(), byN.end(), [](const Group& x, const Group& y) {
-      return std::stoi(x.key[0]) < std::stoi(y.key[0]);
-    });
-    double widest = 0;
-    for (const Group& cell : byN) {
-      std::vector<double> share;
-      std::set<std::string> depths;
-      const int n = std::stoi(cell.key[0]);
-      for (std::size_t r : cell.rows) {
-        share.push_back(abnormalShare(t.number(r, "cells.normal"), t.number(r, "cells.abnormal")));
-        points.push_back({n + 0.0, share.back()});
-        depths.insert(t.cell(r, "depth"));
-      }
-      const Stats st = summarize(share);
-      means.push_back({n + 0.0, st.mean, st.min, st.max, st.stddev});
-      trend.emplace_back(n, st.mean);
-      widest = std::max(widest, st.max - st.min);
-      nMin = std::min(nMin, n);
-      nMax = std::max(nMax, n);
-      std::vector<std::string> row = {k,
-                                      cell.key[0],
-                                      join({depths.begin(), depths.end()}, "/"),
-                                      std::to_string(st.count),
-                                      formatFixed(st.mean, 1),
-                                      formatFixed(st.stddev, 1),
-                                      formatFixed(st.min, 1),
-                                      formatFixed(st.max, 1)};
-      if (!vary.empty()) row.insert(row.begin() + 1, settingsLabel(t, g.rows[0], vary));
-      data.rows.push_back(std::move(row));
-    }
-    if (k == "2" && sphereMean.empty())
-      for (const auto& [n, mean] : trend) sphereMean[n] = mean;
-    const std::string name = "s" + std::to_string(s);
-    gp.data(name + "mean", means);
-    gp.data(name + "runs", points);
-    const std::string colour = colours[s % 6];
-    plots.push_back("$" + name + "mean using 1:2:3:4 with yerrorlines lw 2 pt 7 lc rgb \"" +
-                    colour + "\" title \"" + label + ": mean, min-max\"");
-    plots.push_back("$" + name + "runs using ($1+0.08):2 with points pt 6 ps 0.6 lc rgb \"" +
-                    colour + "\" title \"" + label + ": runs\"");
-    if (trend.empty()) continue;
-    // What it shows: first to last n, and whether every step goes up.
-    std::string sentence =
-        "For " + label + " the abnormal share " +
-        (trend.back().second >= trend.front().second ? "rises" : "falls") + " from " +
-        percent(trend.front().second) + " at n = " + std::to_string(trend.front().first) + " to " +
-        percent(trend.back().second) + " at n = " + std::to_string(trend.back().first);
-    std::vector<std::string> drops;
-    for (std::size_t i = 1; i < trend.size(); ++i)
-      if (trend[i].second < trend[i - 1].second)
-        drops.push_back(std::to_string(trend[i - 1].first) + " to " +
-                        std::to_string(trend[i].first));
-    if (trend.size() > 2)
-      sentence += drops.empty()
-                      ? ", increasing at every step"
-                      : ", not monotonically (it drops from n = " + join(drops, ", ") + ")";
-    sentence += "; the seeds spread it by up to " + formatFixed(widest, 1) + " points.";
-    a.sentences.push_back(sentence);
-    if (trend.size() > 1)
-      a.sentences.push_back(
-          trend.back().second > trend.front().second
-              ? "This agrees with the paper's observation (Sec. 5, Table 1) that degeneracies "
-                "become more likely in higher dimensions (k = " +
-                    k + ")."
-              : "This differs from the paper's observation (Sec. 5) that degeneracies become "
-                "more likely in higher dimensions (k = " +
-                    k + ").");
-  }
-  if (!plots.empty()) {
-    // The paper's Table 1 (surfaces, k = 2, freeform inputs) at its dimensions, for reference.
-    std::vector<std::vector<double>> paper;
-    std::map<int, std::vector<double>> paperByN;
-    for (const PaperRow& p : kPaperTable1) {
-      paper.push_back({p.n + 0.0, p.share});
-      paperByN[p.n].push_back(p.share);
-    }
-    gp.data("paper", paper);
-    plots.push_back(
-        "$paper with points pt 2 ps 1.5 lw 2 lc rgb \"black\" title \"paper, Table 1 "
-        "(k = 2, freeform inputs)\"");
-    if (!sphereMean.empty()) {
-      std::vector<std::string> ours, theirs;
-      for (const auto& [n, shares] : paperByN) {
-        const Stats p = summarize(shares);
-        theirs.push_back(p.count > 1 ? formatFixed(p.min, 1) + "-" + formatFixed(p.max, 1) +
-                                           "% at n = " + std::to_string(n)
-                                     : percent(p.mean) + " at n = " + std::to_string(n));
-        const auto it = sphereMean.find(n);
-        ours.push_back(it != sphereMean.end() ? percent(it->second) : std::string("not run"));
-      }
-      a.sentences.push_back("The paper's Table 1 (surfaces from freeform inputs) has " +
-                            join(theirs, ", ") + "; our rotated spheres give " + join(ours, ", ") +
-                            " there.");
-    }
-    gp.command("set xrange [" + formatFixed(nMin - 0.5, 1) + ":" + formatFixed(nMax + 0.5, 1) +
-               "]");
-    gp.command("plot " + join(plots, ", \\\n       "));
-    a.gnuplot = gp.text();
+  // Every series, then the paper's points.
+  const std::vector<Group> series = groupBy(t, seriesKeys, okRows(t));
+  for (std::size_t s = 0; s < series.size(); ++s)
+    degeneracySeries(t, series[s], s, vary, plot, a.sentences);
+  if (!plot.plots.empty()) {
+    degeneracyPaper(paper, plot, a.sentences);
+    plot.gp.command("set xrange [" + formatFixed(plot.nMin - 0.5, 1) + ":" +
+                    formatFixed(plot.nMax + 0.5, 1) + "]");
+    plot.gp.command("plot " + join(plot.plots, ", \\\n       "));
+    a.gnuplot = plot.gp.text();
   } else {
     a.sentences.push_back("No run succeeded, so there is no curve.");
   }
-  a.tables.push_back(std::move(data));
+  a.tables.push_back(std::move(plot.data));
   return a;
 }
 
 // --- tab-ablation-*: one strategy family compared ----------------------------------------------
+
+/// Per variant, per problem (and other setting): mean visited, mean total time, largest
+/// residual, mean solution cells.
+using AblationMeasures =
+    std::map<std::string, std::map<std::vector<std::string>, std::array<double, 4>>>;
+
+/// The variants of an ablation in order of appearance, with what each measured.
+struct AblationData {
+  std::vector<std::string> variants;
+  AblationMeasures measured;
+};
+
+/// The ablation table's header.
+Table ablationTable(const std::string& id, const std::string& family, bool scalar,
+                    const std::vector<std::string>& other) {
+  Table table;
+  table.id = id;
+  table.caption = "Ablation of the " + family + (scalar ? " type" : " strategy") +
+                  ": cells visited and kept, largest residual, seconds per stage (mean over "
+                  "seeds).";
+  table.columns = {"problem", "n", "k"};
+  for (const std::string& c : other) table.columns.push_back(c);
+  for (std::string c :
+       {family, std::string("visited"), std::string("solution"), std::string("max residual"),
+        std::string("subdivision s"), std::string("projection s"), std::string("connection s"),
+        std::string("total s")})
+    table.columns.push_back(c);
+  table.align = "lrr" + std::string(other.size(), 'r') + "lrrrrrrr";
+  return table;
+}
+
+/// The table row of variant `v` of one problem group (`rows`); records its measures.
+std::vector<std::string> ablationRow(const CsvTable& t, const std::vector<std::string>& other,
+                                     const Group& g, const std::string& v,
+                                     const std::vector<std::size_t>& rows, AblationData& data) {
+  const std::size_t r0 = rows.front();
+  std::vector<std::string> row = {t.cell(r0, "problem"), t.cell(r0, "n"), t.cell(r0, "k")};
+  for (const std::string& c : other) row.push_back(t.cell(r0, c));
+  const double visited = meanOf(t, rows, "cells.visited");
+  const double residual = maxOf(t, rows, "accuracy.max_residual");
+  const double total = meanOf(t, rows, "timing_s.total");
+  const double solution = meanOf(t, rows, "cells.solution");
+  data.measured[v][g.key] = {visited, total, residual, solution};
+  row.push_back(v);
+  row.push_back(formatNumber(std::round(visited)));
+  row.push_back(formatNumber(std::round(solution)));
+  row.push_back(formatNumber(residual, 2));
+  for (std::string_view stage :
+       {"timing_s.subdivision", "timing_s.projection", "timing_s.connection"})
+    row.push_back(formatNumber(meanOf(t, rows, stage), 2));
+  row.push_back(formatNumber(total, 2));
+  return row;
+}
+
+/// What an ablation shows: each variant against the first, and the largest residuals.
+std::vector<std::string> ablationSentences(const AblationData& data) {
+  std::vector<std::string> sentences;
+  const std::string& base = data.variants.front();
+  const auto& baseMeasures = data.measured.at(base);
+  // Each variant against the first: cells, time and solution cells.
+  for (std::size_t v = 1; v < data.variants.size(); ++v) {
+    std::vector<std::pair<double, double>> cells, time;
+    int sameSolution = 0, common = 0;
+    for (const auto& [key, m] : data.measured.at(data.variants[v])) {
+      const auto it = baseMeasures.find(key);
+      if (it == baseMeasures.end()) continue;
+      ++common;
+      cells.emplace_back(m[0], it->second[0]);
+      time.emplace_back(m[1], it->second[1]);
+      if (m[3] == it->second[3]) ++sameSolution;
+    }
+    if (!common) continue;
+    sentences.push_back("`" + data.variants[v] + "` visits " +
+                        formatFixed(geometricMeanRatio(cells), 2) + " times the cells of `" + base +
+                        "` and takes " + formatFixed(geometricMeanRatio(time), 2) +
+                        " times its total time (geometric means over " + std::to_string(common) +
+                        " problem settings); it keeps the same number of solution cells in " +
+                        std::to_string(sameSolution) + " of them.");
+  }
+  // The largest residual of each variant.
+  std::vector<std::string> residuals;
+  for (const std::string& v : data.variants) {
+    double worst = kNaN;
+    for (const auto& [key, m] : data.measured.at(v))
+      if (std::isfinite(m[2])) worst = std::isfinite(worst) ? std::max(worst, m[2]) : m[2];
+    residuals.push_back("`" + v + "` " + formatNumber(worst, 2));
+  }
+  sentences.push_back("Largest residual over all problems: " + join(residuals, ", ") + ".");
+  return sentences;
+}
 
 Artefact tabAblation(const std::string& id, const CsvTable& t, const std::string& family) {
   requireRunColumns(t);
@@ -973,31 +1136,17 @@ Artefact tabAblation(const std::string& id, const CsvTable& t, const std::string
                ? std::string("double")
                : t.cell(r, "scalar") + " " + t.cell(r, "precision_bits");
   };
+  // Group by problem and the other settings that vary.
   std::vector<std::string> other =
       without(varyingColumns(t, kSettingColumns), {"scalar", "precision_bits"});
   std::erase(other, family);
   std::vector<std::string> keys = {"problem"};
   keys.insert(keys.end(), other.begin(), other.end());
-  const std::vector<std::size_t> ok = okRows(t);
-
-  Table table;
-  table.id = id;
-  table.caption = "Ablation of the " + family + (scalar ? " type" : " strategy") +
-                  ": cells visited and kept, largest residual, seconds per stage (mean over "
-                  "seeds).";
-  table.columns = {"problem", "n", "k"};
-  for (const std::string& c : other) table.columns.push_back(c);
-  for (std::string c :
-       {family, std::string("visited"), std::string("solution"), std::string("max residual"),
-        std::string("subdivision s"), std::string("projection s"), std::string("connection s"),
-        std::string("total s")})
-    table.columns.push_back(c);
-  table.align = "lrr" + std::string(other.size(), 'r') + "lrrrrrrr";
 
   // Per variant: for each problem (and other setting), mean visited, time, residual.
-  std::vector<std::string> variants;
-  std::map<std::string, std::map<std::vector<std::string>, std::array<double, 4>>> measured;
-  for (const Group& g : groupBy(t, keys, ok)) {
+  Table table = ablationTable(id, family, scalar, other);
+  AblationData data;
+  for (const Group& g : groupBy(t, keys, okRows(t))) {
     std::vector<std::string> order;
     std::map<std::string, std::vector<std::size_t>> byVariant;
     for (std::size_t r : g.rows) {
@@ -1005,78 +1154,95 @@ Artefact tabAblation(const std::string& id, const CsvTable& t, const std::string
       byVariant[variant(r)].push_back(r);
     }
     for (const std::string& v : order) {
-      if (std::find(variants.begin(), variants.end(), v) == variants.end()) variants.push_back(v);
-      const auto& rows = byVariant[v];
-      const std::size_t r0 = rows.front();
-      std::vector<std::string> row = {t.cell(r0, "problem"), t.cell(r0, "n"), t.cell(r0, "k")};
-      for (const std::string& c : other) row.push_back(t.cell(r0, c));
-      const double visited = meanOf(t, rows, "cells.visited");
-      const double residual = maxOf(t, rows, "accuracy.max_residual");
-      const double total = meanOf(t, rows, "timing_s.total");
-      const double solution = meanOf(t, rows, "cells.solution");
-      measured[v][g.key] = {visited, total, residual, solution};
-      row.push_back(v);
-      row.push_back(formatNumber(std::round(visited)));
-      row.push_back(formatNumber(std::round(solution)));
-      row.push_back(formatNumber(residual, 2));
-      for (std::string_view stage :
-           {"timing_s.subdivision", "timing_s.projection", "timing_s.connection"})
-        row.push_back(formatNumber(meanOf(t, rows, stage), 2));
-      row.push_back(formatNumber(total, 2));
-      table.rows.push_back(std::move(row));
+      if (std::find(data.variants.begin(), data.variants.end(), v) == data.variants.end())
+        data.variants.push_back(v);
+      table.rows.push_back(ablationRow(t, other, g, v, byVariant[v], data));
     }
   }
   a.tables.push_back(std::move(table));
-  if (variants.empty()) {
+
+  // What it shows.
+  if (data.variants.empty())
     a.sentences.push_back("No run succeeded, so there is nothing to compare.");
-    return a;
-  }
-  const std::string& base = variants.front();
-  for (std::size_t v = 1; v < variants.size(); ++v) {
-    std::vector<std::pair<double, double>> cells, time;
-    int sameSolution = 0, common = 0;
-    for (const auto& [key, m] : measured[variants[v]]) {
-      const auto it = measured[base].find(key);
-      if (it == measured[base].end()) continue;
-      ++common;
-      cells.emplace_back(m[0], it->second[0]);
-      time.emplace_back(m[1], it->second[1]);
-      if (m[3] == it->second[3]) ++sameSolution;
-    }
-    if (!common) continue;
-    a.sentences.push_back("`" + variants[v] + "` visits " +
-                          formatFixed(geometricMeanRatio(cells), 2) + " times the cells of `" +
-                          base + "` and takes " + formatFixed(geometricMeanRatio(time), 2) +
-                          " times its total time (geometric means over " + std::to_string(common) +
-                          " problem settings); it keeps the same number of solution cells in " +
-                          std::to_string(sameSolution) + " of them.");
-  }
-  std::vector<std::string> residuals;
-  for (const std::string& v : variants) {
-    double worst = kNaN;
-    for (const auto& [key, m] : measured[v])
-      if (std::isfinite(m[2])) worst = std::isfinite(worst) ? std::max(worst, m[2]) : m[2];
-    residuals.push_back("`" + v + "` " + formatNumber(worst, 2));
-  }
-  a.sentences.push_back("Largest residual over all problems: " + join(residuals, ", ") + ".");
+  else
+    a.sentences = ablationSentences(data);
   return a;
 }
 
 // --- tab-connection ----------------------------------------------------------------------------
 
-Artefact tabConnection(const std::string& id, const CsvTable& t) {
-  requireRunColumns(t);
-  requireColumns(t, {"n", "k", "connection", "expect_components", "expect_euler_characteristic",
-                     "mesh.components", "mesh.euler_characteristic", "mesh.open_ends",
-                     "mesh.boundary_edges", "mesh.nonmanifold_edges", "accuracy.max_chord_error"});
-  Artefact a;
-  a.id = id;
-  a.title = "Connection strategies over the problem corpus";
-  const std::vector<std::string> other =
-      without(varyingColumns(t, kSettingColumns), {"connection"});
-  std::vector<std::string> keys = {"connection"};
-  keys.insert(keys.end(), other.begin(), other.end());
+/// A run's topology against the problem's expectation (`expect_components`,
+/// `expect_euler_characteristic`).
+struct TopologyCheck {
+  const CsvTable& t;
+  /// The expected `what` (components or euler_characteristic); NaN when not given.
+  double expected(std::size_t r, const char* what) const {
+    return t.number(r, std::string("expect_") + what);
+  }
+  /// Whether run `r` succeeded and got `what` as expected.
+  bool right(std::size_t r, const char* what) const {
+    const double e = expected(r, what);
+    return isOk(t, r) && std::isfinite(e) && t.number(r, std::string("mesh.") + what) == e;
+  }
+  /// Whether the problem of run `r` has an expected topology.
+  bool hasExpect(std::size_t r) const {
+    return std::isfinite(expected(r, "components")) ||
+           std::isfinite(expected(r, "euler_characteristic"));
+  }
+};
 
+/// One connection's (and other varying settings') totals over the corpus.
+struct ConnectionScore {
+  std::string label;
+  int runs = 0, withExpect = 0, components = 0, euler = 0, both = 0;
+  double boundary = 0, nonmanifold = 0, openEnds = 0;
+};
+
+/// The score table's row of group `g`; adds its score to `scores`.
+std::vector<std::string> connectionScoreRow(const TopologyCheck& check, const Group& g,
+                                            std::vector<ConnectionScore>& scores) {
+  const CsvTable& t = check.t;
+  ConnectionScore s;
+  s.label = join(g.key, ", ");
+  int failed = 0;
+  std::vector<std::size_t> ok;
+  for (std::size_t r : g.rows) {
+    ++s.runs;
+    if (!isOk(t, r)) {
+      ++failed;
+    } else {
+      ok.push_back(r);
+      s.openEnds += t.number(r, "mesh.open_ends");
+      s.boundary += t.number(r, "mesh.boundary_edges");
+      s.nonmanifold += t.number(r, "mesh.nonmanifold_edges");
+    }
+    if (!check.hasExpect(r)) continue;
+    ++s.withExpect;
+    const bool c = check.right(r, "components"), e = check.right(r, "euler_characteristic");
+    s.components += c;
+    s.euler += e;
+    s.both += c && e;
+  }
+  const Stats chord = summarize(values(t, ok, "accuracy.max_chord_error"));
+  const auto share = [&](int count) {
+    return s.withExpect ? std::to_string(count) + "/" + std::to_string(s.withExpect) + " (" +
+                              formatFixed(100.0 * count / s.withExpect, 0) + "%)"
+                        : std::string(kDash);
+  };
+  std::vector<std::string> row = g.key;
+  for (const std::string& cell :
+       {std::to_string(s.runs), std::to_string(failed), share(s.components), share(s.euler),
+        share(s.both), formatNumber(s.openEnds), formatNumber(s.boundary),
+        formatNumber(s.nonmanifold), formatNumber(chord.median, 2), formatNumber(chord.max, 2)})
+    row.push_back(cell);
+  scores.push_back(s);
+  return row;
+}
+
+/// The score table: one row per connection (and other varying settings).
+Table connectionScoreTable(const std::string& id, const TopologyCheck& check,
+                           const std::vector<std::string>& keys,
+                           std::vector<ConnectionScore>& scores) {
   Table table;
   table.id = id;
   table.caption =
@@ -1090,75 +1256,53 @@ Artefact tabConnection(const std::string& id, const CsvTable& t) {
         "boundary edges", "non-manifold edges", "median chord error", "max chord error"})
     table.columns.push_back(c);
   table.align = std::string(keys.size(), 'l') + "rrrrrrrrrr";
+  for (const Group& g : groupBy(check.t, keys))
+    table.rows.push_back(connectionScoreRow(check, g, scores));
+  return table;
+}
 
-  const auto expected = [&](std::size_t r, const char* what) {
-    return t.number(r, std::string("expect_") + what);
-  };
-  const auto right = [&](std::size_t r, const char* what) {
-    const double e = expected(r, what);
-    return isOk(t, r) && std::isfinite(e) && t.number(r, std::string("mesh.") + what) == e;
-  };
-  struct Score {
-    std::string label;
-    int runs = 0, withExpect = 0, components = 0, euler = 0, both = 0;
-    double boundary = 0, nonmanifold = 0, openEnds = 0;
-  };
-  std::vector<Score> scores;
-  for (const Group& g : groupBy(t, keys)) {
-    Score s;
-    s.label = join(g.key, ", ");
-    int failed = 0;
-    std::vector<std::size_t> ok;
-    for (std::size_t r : g.rows) {
-      ++s.runs;
-      if (!isOk(t, r)) {
-        ++failed;
-      } else {
-        ok.push_back(r);
-        s.openEnds += t.number(r, "mesh.open_ends");
-        s.boundary += t.number(r, "mesh.boundary_edges");
-        s.nonmanifold += t.number(r, "mesh.nonmanifold_edges");
-      }
-      if (!std::isfinite(expected(r, "components")) &&
-          !std::isfinite(expected(r, "euler_characteristic")))
-        continue;
-      ++s.withExpect;
-      const bool c = right(r, "components"), e = right(r, "euler_characteristic");
-      s.components += c;
-      s.euler += e;
-      s.both += c && e;
-    }
-    const Stats chord = summarize(values(t, ok, "accuracy.max_chord_error"));
-    const auto share = [&](int count) {
-      return s.withExpect ? std::to_string(count) + "/" + std::to_string(s.withExpect) + " (" +
-                                formatFixed(100.0 * count / s.withExpect, 0) + "%)"
-                          : std::string(kDash);
-    };
-    std::vector<std::string> row = g.key;
-    row.push_back(std::to_string(s.runs));
-    row.push_back(std::to_string(failed));
-    row.push_back(share(s.components));
-    row.push_back(share(s.euler));
-    row.push_back(share(s.both));
-    row.push_back(formatNumber(s.openEnds));
-    row.push_back(formatNumber(s.boundary));
-    row.push_back(formatNumber(s.nonmanifold));
-    row.push_back(formatNumber(chord.median, 2));
-    row.push_back(formatNumber(chord.max, 2));
-    table.rows.push_back(std::move(row));
-    scores.push_back(s);
+/// A cell of the detail table: components / Euler characteristic of `runs` (the runs of one
+/// problem with one connection), with b(oundary) and nm (non-manifold) edges and `*` when wrong.
+std::string connectionCell(const TopologyCheck& check, const std::vector<std::size_t>& runs) {
+  const CsvTable& t = check.t;
+  if (runs.empty()) return std::string(kDash);
+  const std::size_t r = runs.front();
+  std::string text;
+  if (!isOk(t, r)) {
+    text = t.cell(r, "status");
+  } else {
+    text = formatNumber(t.number(r, "mesh.components")) + " / " +
+           formatNumber(t.number(r, "mesh.euler_characteristic"));
+    const double b = t.number(r, "mesh.boundary_edges"), nm = t.number(r, "mesh.nonmanifold_edges");
+    if (b > 0) text += " b" + formatNumber(b);
+    if (nm > 0) text += " nm" + formatNumber(nm);
+    const bool wrong =
+        (std::isfinite(check.expected(r, "components")) && !check.right(r, "components")) ||
+        (std::isfinite(check.expected(r, "euler_characteristic")) &&
+         !check.right(r, "euler_characteristic"));
+    if (check.hasExpect(r) && wrong) text += " *";
   }
-  a.tables.push_back(std::move(table));
+  if (runs.size() > 1) {
+    int good = 0;
+    for (std::size_t x : runs)
+      good += check.right(x, "components") && check.right(x, "euler_characteristic");
+    text += " (" + std::to_string(good) + "/" + std::to_string(runs.size()) + " right)";
+  }
+  return text;
+}
 
-  // Per problem: components / Euler characteristic of each connection beside the expectation.
+/// Per problem: components / Euler characteristic of each connection beside the expectation.
+Table connectionDetailTable(const std::string& id, const TopologyCheck& check,
+                            const std::vector<std::string>& other) {
+  const CsvTable& t = check.t;
+  // The connections in order of appearance, one column each.
   std::vector<std::string> connections;
   for (std::size_t r = 0; r < t.size(); ++r)
     if (std::find(connections.begin(), connections.end(), t.cell(r, "connection")) ==
         connections.end())
       connections.push_back(t.cell(r, "connection"));
   std::vector<std::string> rowKeys = {"problem"};
-  const std::vector<std::string> detailOther = without(other, {});
-  rowKeys.insert(rowKeys.end(), detailOther.begin(), detailOther.end());
+  rowKeys.insert(rowKeys.end(), other.begin(), other.end());
   Table detail;
   detail.id = id;
   detail.caption =
@@ -1170,74 +1314,188 @@ Artefact tabConnection(const std::string& id, const CsvTable& t) {
   for (const std::string& c : connections) detail.columns.push_back(c);
   detail.align = "l" + std::string("rrl") + std::string(rowKeys.size() - 1, 'l') +
                  std::string(connections.size(), 'l');
+  // One row per problem (and other varying settings).
+  const auto show = [](double v) { return std::isfinite(v) ? formatNumber(v) : std::string("?"); };
   for (const Group& g : groupBy(t, rowKeys)) {
     const std::size_t r0 = g.rows.front();
-    const auto show = [](double v) {
-      return std::isfinite(v) ? formatNumber(v) : std::string("?");
-    };
-    std::vector<std::string> row = {
-        g.key[0], t.cell(r0, "n"), t.cell(r0, "k"),
-        show(expected(r0, "components")) + " / " + show(expected(r0, "euler_characteristic"))};
+    std::vector<std::string> row = {g.key[0], t.cell(r0, "n"), t.cell(r0, "k"),
+                                    show(check.expected(r0, "components")) + " / " +
+                                        show(check.expected(r0, "euler_characteristic"))};
     for (std::size_t i = 1; i < g.key.size(); ++i) row.push_back(g.key[i]);
     for (const std::string& c : connections) {
       std::vector<std::size_t> runs;
       for (std::size_t r : g.rows)
         if (t.cell(r, "connection") == c) runs.push_back(r);
-      if (runs.empty()) {
-        row.push_back(std::string(kDash));
-        continue;
-      }
-      const std::size_t r = runs.front();
-      std::string text;
-      if (!isOk(t, r)) {
-        text = t.cell(r, "status");
-      } else {
-        text = formatNumber(t.number(r, "mesh.components")) + " / " +
-               formatNumber(t.number(r, "mesh.euler_characteristic"));
-        const double b = t.number(r, "mesh.boundary_edges"),
-                     nm = t.number(r, "mesh.nonmanifold_edges");
-        if (b > 0) text += " b" + formatNumber(b);
-        if (nm > 0) text += " nm" + formatNumber(nm);
-        const bool hasExpect = std::isfinite(expected(r, "components")) ||
-                               std::isfinite(expected(r, "euler_characteristic"));
-        const bool wrong = (std::isfinite(expected(r, "components")) && !right(r, "components")) ||
-                           (std::isfinite(expected(r, "euler_characteristic")) &&
-                            !right(r, "euler_characteristic"));
-        if (hasExpect && wrong) text += " *";
-      }
-      if (runs.size() > 1) {
-        int good = 0;
-        for (std::size_t x : runs)
-          good += right(x, "components") && right(x, "euler_characteristic");
-        text += " (" + std::to_string(good) + "/" + std::to_string(runs.size()) + " right)";
-      }
-      row.push_back(text);
+      row.push_back(connectionCell(check, runs));
     }
     detail.rows.push_back(std::move(row));
   }
-  a.tables.push_back(std::move(detail));
+  return detail;
+}
 
+/// What tab-connection shows: right topologies and defects per connection.
+std::vector<std::string> connectionSentences(const std::vector<ConnectionScore>& scores) {
+  std::vector<std::string> sentences;
   std::vector<std::string> parts;
-  for (const Score& s : scores)
+  for (const ConnectionScore& s : scores)
     if (s.withExpect)
       parts.push_back("`" + s.label + "` " + std::to_string(s.both) + " of " +
                       std::to_string(s.withExpect));
   if (!parts.empty())
-    a.sentences.push_back("Runs with both the components and the Euler characteristic right: " +
-                          join(parts, ", ") + ".");
+    sentences.push_back("Runs with both the components and the Euler characteristic right: " +
+                        join(parts, ", ") + ".");
   parts.clear();
-  for (const Score& s : scores)
+  for (const ConnectionScore& s : scores)
     parts.push_back("`" + s.label + "` " + formatNumber(s.boundary) + " boundary and " +
                     formatNumber(s.nonmanifold) + " non-manifold edges, " +
                     formatNumber(s.openEnds) + " open ends");
   if (!parts.empty())
-    a.sentences.push_back("In total " + join(parts, "; ") +
-                          ". The paper's connection (Sec. 4) keeps holes in surfaces, which "
-                          "shows as boundary edges where the expected surface is closed.");
+    sentences.push_back("In total " + join(parts, "; ") +
+                        ". The paper's connection (Sec. 4) keeps holes in surfaces, which "
+                        "shows as boundary edges where the expected surface is closed.");
+  return sentences;
+}
+
+Artefact tabConnection(const std::string& id, const CsvTable& t) {
+  requireRunColumns(t);
+  requireColumns(t, {"n", "k", "connection", "expect_components", "expect_euler_characteristic",
+                     "mesh.components", "mesh.euler_characteristic", "mesh.open_ends",
+                     "mesh.boundary_edges", "mesh.nonmanifold_edges", "accuracy.max_chord_error"});
+  Artefact a;
+  a.id = id;
+  a.title = "Connection strategies over the problem corpus";
+  // Group by connection and the other settings that vary.
+  const std::vector<std::string> other =
+      without(varyingColumns(t, kSettingColumns), {"connection"});
+  std::vector<std::string> keys = {"connection"};
+  keys.insert(keys.end(), other.begin(), other.end());
+  // The tables and what they show.
+  const TopologyCheck check{t};
+  std::vector<ConnectionScore> scores;
+  a.tables.push_back(connectionScoreTable(id, check, keys, scores));
+  a.tables.push_back(connectionDetailTable(id, check, other));
+  a.sentences = connectionSentences(scores);
   return a;
 }
 
 // --- fig-convergence ---------------------------------------------------------------------------
+
+/// The reference slopes of fig-convergence: two points each, through the finest point of the
+/// first series of their kind.
+struct ConvergenceGuides {
+  std::vector<std::vector<double>> chord, cells1, cells2;
+};
+
+/// fig-convergence's gnuplot script: a 2x2 multiplot, log-log.
+GnuplotScript convergenceScript(const std::string& id) {
+  GnuplotScript gp(id, 1100, 850);
+  gp.command("set multiplot layout 2,2 title \"" + id +
+             ": convergence with the cell size h = 2^{-depth}\"");
+  gp.command("set logscale xy");
+  gp.command("set format y \"10^{%L}\"");
+  gp.command("set xlabel \"h (relative cell size)\"");
+  gp.command("set grid");
+  gp.command("set key bottom right font \",8\"");
+  return gp;
+}
+
+/// Sets `ref` (when still empty) to a guide of `slope` over the depths `h`, half a decade below
+/// the finest point of `y`, so that the guide does not hide the curve.
+void convergenceGuide(std::vector<std::vector<double>>& ref, const std::vector<double>& h,
+                      const std::vector<double>& y, double slope) {
+  if (!ref.empty() || h.size() < 2 || !(y.back() > 0)) return;
+  const double h1 = h.back(), h0 = h.front();
+  const double y1 = 0.3 * y.back();
+  ref = {{h0, y1 * std::pow(h0 / h1, slope)}, {h1, y1}};
+}
+
+/// One series (problem and varying settings) of fig-convergence: its table rows, its data
+/// block `s<s>` and curves in the four panels, its guides and its sentence.
+void convergenceSeries(const CsvTable& t, const Group& g, std::size_t s,
+                       const std::vector<std::string>& vary, Table& data, GnuplotScript& gp,
+                       std::array<std::vector<std::string>, 4>& panels, ConvergenceGuides& guides,
+                       std::vector<std::string>& sentences) {
+  static const char* colours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd",
+                                  "#ff7f0e", "#8c564b", "#e377c2", "#7f7f7f"};
+  const std::size_t r0 = g.rows.front();
+  const std::string label =
+      t.cell(r0, "problem") + (vary.empty() ? "" : " " + settingsLabel(t, r0, vary));
+  const int k = static_cast<int>(t.number(r0, "k"));
+  std::vector<Group> byDepth = groupBy(t, std::vector<std::string>{"depth"}, g.rows);
+  std::sort(byDepth.begin(), byDepth.end(), [](const Group& x, const Group& y) {
+    return std::stoi(x.key[0]) < std::stoi(y.key[0]);
+  });
+  // The means per depth, as table rows and data.
+  std::vector<std::vector<double>> rows;
+  std::vector<double> h, chord, residual, cells, time;
+  for (const Group& d : byDepth) {
+    const double hh = std::ldexp(1.0, -std::stoi(d.key[0]));
+    h.push_back(hh);
+    chord.push_back(meanOf(t, d.rows, "accuracy.max_chord_error"));
+    residual.push_back(meanOf(t, d.rows, "accuracy.max_residual"));
+    cells.push_back(meanOf(t, d.rows, "cells.solution"));
+    time.push_back(meanOf(t, d.rows, "timing_s.total"));
+    rows.push_back({hh, chord.back(), residual.back(), cells.back(), time.back()});
+    std::vector<std::string> row = {t.cell(r0, "problem"),
+                                    t.cell(r0, "k"),
+                                    d.key[0],
+                                    formatNumber(chord.back(), 2),
+                                    formatNumber(residual.back(), 2),
+                                    formatNumber(std::round(cells.back())),
+                                    formatNumber(time.back(), 2)};
+    if (!vary.empty()) row.insert(row.begin() + 1, settingsLabel(t, r0, vary));
+    data.rows.push_back(std::move(row));
+  }
+  // The curves.
+  const std::string name = "s" + std::to_string(s);
+  gp.data(name, rows);
+  const std::string style = " with linespoints pt 7 ps 0.7 lc rgb \"" +
+                            std::string(colours[s % 8]) + "\" title \"" + label + "\"";
+  for (int p = 0; p < 4; ++p)
+    panels[p].push_back("$" + name + " using 1:($" + std::to_string(p + 2) + ">0?$" +
+                        std::to_string(p + 2) + ":NaN)" + style);
+  // Reference slopes through the finest point of the first series of their kind.
+  convergenceGuide(guides.chord, h, chord, 2.0);
+  convergenceGuide(k == 1 ? guides.cells1 : guides.cells2, h, cells, -static_cast<double>(k));
+  if (h.size() < 2) return;
+  // What it shows: the fitted slopes.
+  const double chordSlope = logLogSlope(h, chord), cellSlope = logLogSlope(h, cells),
+               timeSlope = logLogSlope(h, time);
+  const Stats res = summarize(residual);
+  sentences.push_back(label + " (k = " + std::to_string(k) + ", depths " + byDepth.front().key[0] +
+                      " to " + byDepth.back().key[0] + "): the chord error falls as h^" +
+                      formatFixed(chordSlope, 2) +
+                      " (expected h^2), the solution cells grow as h^" + formatFixed(cellSlope, 2) +
+                      " (expected h^-" + std::to_string(k) + "), the time as h^" +
+                      formatFixed(timeSlope, 2) + "; the residual stays between " +
+                      formatNumber(res.min, 2) + " and " + formatNumber(res.max, 2) + ".");
+}
+
+/// Adds the guides and plots the four panels of fig-convergence.
+void convergencePanels(GnuplotScript& gp, std::array<std::vector<std::string>, 4>& panels,
+                       const ConvergenceGuides& guides) {
+  const std::string refStyle = " with lines dt 2 lw 2 lc rgb \"black\"";
+  if (!guides.chord.empty()) {
+    gp.data("refchord", guides.chord);
+    panels[0].push_back("$refchord" + refStyle + " title \"O(h^2)\"");
+  }
+  if (!guides.cells1.empty()) {
+    gp.data("refcells1", guides.cells1);
+    panels[2].push_back("$refcells1" + refStyle + " title \"O(h^{-1})\"");
+  }
+  if (!guides.cells2.empty()) {
+    gp.data("refcells2", guides.cells2);
+    panels[2].push_back("$refcells2 with lines dt 3 lw 2 lc rgb \"black\" title \"O(h^{-2})\"");
+  }
+  const char* titles[] = {"max chord error", "max residual |F_i|", "solution cells",
+                          "total time (s)"};
+  for (int p = 0; p < 4; ++p) {
+    gp.command(std::string("set title \"") + titles[p] + "\"");
+    gp.command(std::string("set ylabel \"") + titles[p] + "\"");
+    gp.command("plot " + join(panels[p], ", \\\n       "));
+  }
+  gp.command("unset multiplot");
+}
 
 Artefact figConvergence(const std::string& id, const CsvTable& t) {
   requireRunColumns(t);
@@ -1247,11 +1505,12 @@ Artefact figConvergence(const std::string& id, const CsvTable& t) {
   a.id = id;
   a.figure = true;
   a.title = "Convergence with the depth";
+  // One series per problem and varying setting.
   const std::vector<std::string> vary = without(varyingColumns(t, kSettingColumns), {"depth"});
   std::vector<std::string> keys = {"problem"};
   keys.insert(keys.end(), vary.begin(), vary.end());
-  const std::vector<std::size_t> ok = okRows(t);
 
+  // The data table's header.
   Table data;
   data.id = id;
   data.caption =
@@ -1263,105 +1522,19 @@ Artefact figConvergence(const std::string& id, const CsvTable& t) {
     data.columns.insert(data.columns.begin() + 1, "settings");
     data.align.insert(1, "l");
   }
-  GnuplotScript gp(id, 1100, 850);
-  gp.command("set multiplot layout 2,2 title \"" + id +
-             ": convergence with the cell size h = 2^{-depth}\"");
-  gp.command("set logscale xy");
-  gp.command("set format y \"10^{%L}\"");
-  gp.command("set xlabel \"h (relative cell size)\"");
-  gp.command("set grid");
-  gp.command("set key bottom right font \",8\"");
-  const char* colours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd",
-                           "#ff7f0e", "#8c564b", "#e377c2", "#7f7f7f"};
+  // Every series, then the panels.
+  GnuplotScript gp = convergenceScript(id);
   std::array<std::vector<std::string>, 4> panels;
-  std::vector<std::vector<double>> chordRef, cellsRef1, cellsRef2;
-  const std::vector<Group> series = groupBy(t, keys, ok);
-  for (std::size_t s = 0; s < series.size(); ++s) {
-    const Group& g = series[s];
-    const std::size_t r0 = g.rows.front();
-    const std::string label =
-        t.cell(r0, "problem") + (vary.empty() ? "" : " " + settingsLabel(t, r0, vary));
-    const int k = static_cast<int>(t.number(r0, "k"));
-    std::vector<Group> byDepth = groupBy(t, std::vector<std::string>{"depth"}, g.rows);
-    std::sort(byDepth.begin(), byDepth.end(), [](const Group& x, const Group& y) {
-      return std::stoi(x.key[0]) < std::stoi(y.key[0]);
-    });
-    std::vector<std::vector<double>> rows;
-    std::vector<double> h, chord, residual, cells, time;
-    for (const Group& d : byDepth) {
-      const double hh = std::ldexp(1.0, -std::stoi(d.key[0]));
-      h.push_back(hh);
-      chord.push_back(meanOf(t, d.rows, "accuracy.max_chord_error"));
-      residual.push_back(meanOf(t, d.rows, "accuracy.max_residual"));
-      cells.push_back(meanOf(t, d.rows, "cells.solution"));
-      time.push_back(meanOf(t, d.rows, "timing_s.total"));
-      rows.push_back({hh, chord.back(), residual.back(), cells.back(), time.back()});
-      std::vector<std::string> row = {t.cell(r0, "problem"),
-                                      t.cell(r0, "k"),
-                                      d.key[0],
-                                      formatNumber(chord.back(), 2),
-                                      formatNumber(residual.back(), 2),
-                                      formatNumber(std::round(cells.back())),
-                                      formatNumber(time.back(), 2)};
-      if (!vary.empty()) row.insert(row.begin() + 1, settingsLabel(t, r0, vary));
-      data.rows.push_back(std::move(row));
-    }
-    const std::string name = "s" + std::to_string(s);
-    gp.data(name, rows);
-    const std::string style = " with linespoints pt 7 ps 0.7 lc rgb \"" +
-                              std::string(colours[s % 8]) + "\" title \"" + label + "\"";
-    for (int p = 0; p < 4; ++p)
-      panels[p].push_back("$" + name + " using 1:($" + std::to_string(p + 2) + ">0?$" +
-                          std::to_string(p + 2) + ":NaN)" + style);
-    // Reference slopes through the finest point of the first series of their kind.
-    const auto reference = [&](std::vector<std::vector<double>>& ref, const std::vector<double>& y,
-                               double slope) {
-      if (!ref.empty() || h.size() < 2 || !(y.back() > 0)) return;
-      const double h1 = h.back(), h0 = h.front();
-      // Half a decade below the data, so that the guide does not hide the curve.
-      const double y1 = 0.3 * y.back();
-      ref = {{h0, y1 * std::pow(h0 / h1, slope)}, {h1, y1}};
-    };
-    reference(chordRef, chord, 2.0);
-    reference(k == 1 ? cellsRef1 : cellsRef2, cells, -static_cast<double>(k));
-    if (h.size() < 2) continue;
-    const double chordSlope = logLogSlope(h, chord), cellSlope = logLogSlope(h, cells),
-                 timeSlope = logLogSlope(h, time);
-    const Stats res = summarize(residual);
-    a.sentences.push_back(
-        label + " (k = " + std::to_string(k) + ", depths " + byDepth.front().key[0] + " to " +
-        byDepth.back().key[0] + "): the chord error falls as h^" + formatFixed(chordSlope, 2) +
-        " (expected h^2), the solution cells grow as h^" + formatFixed(cellSlope, 2) +
-        " (expected h^-" + std::to_string(k) + "), the time as h^" + formatFixed(timeSlope, 2) +
-        "; the residual stays between " + formatNumber(res.min, 2) + " and " +
-        formatNumber(res.max, 2) + ".");
-  }
+  ConvergenceGuides guides;
+  const std::vector<Group> series = groupBy(t, keys, okRows(t));
+  for (std::size_t s = 0; s < series.size(); ++s)
+    convergenceSeries(t, series[s], s, vary, data, gp, panels, guides, a.sentences);
   if (series.empty()) {
     a.sentences.push_back("No run succeeded, so there is no curve.");
     a.tables.push_back(std::move(data));
     return a;
   }
-  const std::string refStyle = " with lines dt 2 lw 2 lc rgb \"black\"";
-  if (!chordRef.empty()) {
-    gp.data("refchord", chordRef);
-    panels[0].push_back("$refchord" + refStyle + " title \"O(h^2)\"");
-  }
-  if (!cellsRef1.empty()) {
-    gp.data("refcells1", cellsRef1);
-    panels[2].push_back("$refcells1" + refStyle + " title \"O(h^{-1})\"");
-  }
-  if (!cellsRef2.empty()) {
-    gp.data("refcells2", cellsRef2);
-    panels[2].push_back("$refcells2 with lines dt 3 lw 2 lc rgb \"black\" title \"O(h^{-2})\"");
-  }
-  const char* titles[] = {"max chord error", "max residual |F_i|", "solution cells",
-                          "total time (s)"};
-  for (int p = 0; p < 4; ++p) {
-    gp.command(std::string("set title \"") + titles[p] + "\"");
-    gp.command(std::string("set ylabel \"") + titles[p] + "\"");
-    gp.command("plot " + join(panels[p], ", \\\n       "));
-  }
-  gp.command("unset multiplot");
+  convergencePanels(gp, panels, guides);
   a.gnuplot = gp.text();
   a.tables.push_back(std::move(data));
   return a;
@@ -1369,14 +1542,8 @@ Artefact figConvergence(const std::string& id, const CsvTable& t) {
 
 // --- fig-cells: a Figure-2-style picture of the solution cells ---------------------------------
 
-Artefact figCells(const std::string& id, const CsvTable& t, const std::filesystem::path& dir) {
-  requireRunColumns(t);
-  requireColumns(t, {"n", "k", "depth", "cells.normal", "cells.abnormal", "mesh.components"});
-  Artefact a;
-  a.id = id;
-  a.figure = true;
-  a.title = "Solution cells of a 2-D problem (cf. the paper's Figures 2 and 3)";
-  // The first 2-D problem with a successful run, at its largest depth.
+/// The first 2-D problem with a successful run that has a cells.csv, at its largest depth.
+std::optional<std::size_t> cellsRun(const CsvTable& t, const std::filesystem::path& dir) {
   std::optional<std::size_t> pick;
   for (std::size_t r : okRows(t))
     if (t.cell(r, "n") == "2" &&
@@ -1384,15 +1551,11 @@ Artefact figCells(const std::string& id, const CsvTable& t, const std::filesyste
         (!pick || (t.cell(r, "problem") == t.cell(*pick, "problem") &&
                    t.number(r, "depth") > t.number(*pick, "depth"))))
       pick = r;
-  if (!pick) {
-    a.sentences.push_back("No successful 2-D run with a cells.csv, so there is no picture.");
-    return a;
-  }
-  const std::size_t r = *pick;
-  const std::filesystem::path run = dir / "runs" / t.cell(r, "run");
-  const CsvTable cells = readCsv(run / "cells.csv");
-  requireColumns(cells, {"i0", "i1", "c0", "c1", "class", "p0", "p1"});
-  // Cell size per axis from two cells with different indices on that axis.
+  return pick;
+}
+
+/// Half the cell size per axis, from two cells with different indices on that axis.
+std::array<double, 2> cellHalfSizes(const CsvTable& cells) {
   std::array<double, 2> half = {kNaN, kNaN};
   for (int j = 0; j < 2; ++j) {
     const std::string i = "i" + std::to_string(j), c = "c" + std::to_string(j);
@@ -1403,14 +1566,11 @@ Artefact figCells(const std::string& id, const CsvTable& t, const std::filesyste
   }
   if (!std::isfinite(half[0])) half[0] = std::isfinite(half[1]) ? half[1] : 0.01;
   if (!std::isfinite(half[1])) half[1] = half[0];
-  std::map<std::string, std::vector<std::vector<double>>> byClass;
-  std::vector<std::vector<double>> points;
-  for (std::size_t x = 0; x < cells.size(); ++x) {
-    byClass[cells.cell(x, "class")].push_back(
-        {cells.number(x, "c0"), cells.number(x, "c1"), half[0], half[1]});
-    points.push_back({cells.number(x, "p0"), cells.number(x, "p1")});
-  }
-  // A canvas of the cells' aspect ratio (the plot keeps x and y to scale).
+  return half;
+}
+
+/// The height over the width of the cells' bounding box, clamped to 0.3..1.5 (1 without cells).
+double cellsAspect(const CsvTable& cells, const std::array<double, 2>& half) {
   double lo[2] = {HUGE_VAL, HUGE_VAL}, hi[2] = {-HUGE_VAL, -HUGE_VAL};
   for (std::size_t x = 0; x < cells.size(); ++x)
     for (int j = 0; j < 2; ++j) {
@@ -1418,16 +1578,16 @@ Artefact figCells(const std::string& id, const CsvTable& t, const std::filesyste
       lo[j] = std::min(lo[j], c - half[j]);
       hi[j] = std::max(hi[j], c + half[j]);
     }
-  const double aspect =
-      cells.size() ? std::clamp((hi[1] - lo[1]) / (hi[0] - lo[0]), 0.3, 1.5) : 1.0;
-  GnuplotScript gp(id, 1000, static_cast<int>(150 + 850 * aspect));
-  gp.command("set size ratio -1");
-  gp.command("set title \"" + t.cell(r, "problem") + ", depth " + t.cell(r, "depth") +
-             ": solution cells and the polyline\"");
-  gp.command("set xlabel \"x_0\"");
-  gp.command("set ylabel \"x_1\"");
-  gp.command("set key outside bottom center horizontal");
-  std::vector<std::string> plots;
+  return cells.size() ? std::clamp((hi[1] - lo[1]) / (hi[0] - lo[0]), 0.3, 1.5) : 1.0;
+}
+
+/// One data block of boxes per cell class, coloured by class; adds their plots.
+void plotCellBoxes(GnuplotScript& gp, const CsvTable& cells, const std::array<double, 2>& half,
+                   std::vector<std::string>& plots) {
+  std::map<std::string, std::vector<std::vector<double>>> byClass;
+  for (std::size_t x = 0; x < cells.size(); ++x)
+    byClass[cells.cell(x, "class")].push_back(
+        {cells.number(x, "c0"), cells.number(x, "c1"), half[0], half[1]});
   const std::map<std::string, std::string> colour = {
       {"normal", "#6baed6"}, {"abnormal", "#fb6a4a"}, {"failed", "#969696"}};
   for (const auto& [cls, rows] : byClass) {
@@ -1440,33 +1600,73 @@ Artefact figCells(const std::string& id, const CsvTable& t, const std::filesyste
                     (it != colour.end() ? it->second : std::string("#fdd0a2")) + "\" title \"" +
                     cls + " (" + std::to_string(rows.size()) + ")\"");
   }
-  std::string meshNote;
+}
+
+/// Plots the run's mesh.ply as a polyline in the first two coordinates; returns the sentence
+/// about it ("" without a mesh.ply).
+std::string plotPolyline(GnuplotScript& gp, const CsvTable& t, std::size_t r,
+                         const std::filesystem::path& run, std::vector<std::string>& plots) {
   const std::filesystem::path ply = run / "mesh.ply";
-  if (std::filesystem::exists(ply)) {
-    const PlyMesh mesh = readPly(ply);
-    std::vector<std::vector<double>> segments;
-    for (const auto& s : mesh.simplices) {
-      for (std::size_t v = 0; v <= s.size(); ++v) {
-        const int i = s[v % s.size()];
-        if (v == s.size() && s.size() == 2) break;
-        const auto& u = mesh.u[i];
-        segments.push_back(u.size() >= 2 ? std::vector<double>{u[0], u[1]}
-                                         : std::vector<double>{mesh.xyz[i][0], mesh.xyz[i][1]});
-      }
-      segments.push_back({});
+  if (!std::filesystem::exists(ply)) return "";
+  const PlyMesh mesh = readPly(ply);
+  std::vector<std::vector<double>> segments;
+  for (const auto& s : mesh.simplices) {
+    for (std::size_t v = 0; v <= s.size(); ++v) {
+      const int i = s[v % s.size()];
+      if (v == s.size() && s.size() == 2) break;
+      const auto& u = mesh.u[i];
+      segments.push_back(u.size() >= 2 ? std::vector<double>{u[0], u[1]}
+                                       : std::vector<double>{mesh.xyz[i][0], mesh.xyz[i][1]});
     }
-    gp.data("curve", segments);
-    plots.push_back("$curve with lines lw 2 lc rgb \"black\" title \"polyline\"");
-    meshNote = " The polyline has " + std::to_string(mesh.xyz.size()) + " vertices and " +
-               t.cell(r, "mesh.components") + " component(s)" +
-               (t.hasColumn("expect_components") && !t.cell(r, "expect_components").empty()
-                    ? " (expected " + t.cell(r, "expect_components") + ")."
-                    : ".");
+    segments.push_back({});
   }
+  gp.data("curve", segments);
+  plots.push_back("$curve with lines lw 2 lc rgb \"black\" title \"polyline\"");
+  return " The polyline has " + std::to_string(mesh.xyz.size()) + " vertices and " +
+         t.cell(r, "mesh.components") + " component(s)" +
+         (t.hasColumn("expect_components") && !t.cell(r, "expect_components").empty()
+              ? " (expected " + t.cell(r, "expect_components") + ")."
+              : ".");
+}
+
+Artefact figCells(const std::string& id, const CsvTable& t, const std::filesystem::path& dir) {
+  requireRunColumns(t);
+  requireColumns(t, {"n", "k", "depth", "cells.normal", "cells.abnormal", "mesh.components"});
+  Artefact a;
+  a.id = id;
+  a.figure = true;
+  a.title = "Solution cells of a 2-D problem (cf. the paper's Figures 2 and 3)";
+  // The first 2-D problem with a successful run, at its largest depth.
+  const std::optional<std::size_t> pick = cellsRun(t, dir);
+  if (!pick) {
+    a.sentences.push_back("No successful 2-D run with a cells.csv, so there is no picture.");
+    return a;
+  }
+  const std::size_t r = *pick;
+  const std::filesystem::path run = dir / "runs" / t.cell(r, "run");
+  const CsvTable cells = readCsv(run / "cells.csv");
+  requireColumns(cells, {"i0", "i1", "c0", "c1", "class", "p0", "p1"});
+  const std::array<double, 2> half = cellHalfSizes(cells);
+  // A canvas of the cells' aspect ratio (the plot keeps x and y to scale).
+  GnuplotScript gp(id, 1000, static_cast<int>(150 + 850 * cellsAspect(cells, half)));
+  gp.command("set size ratio -1");
+  gp.command("set title \"" + t.cell(r, "problem") + ", depth " + t.cell(r, "depth") +
+             ": solution cells and the polyline\"");
+  gp.command("set xlabel \"x_0\"");
+  gp.command("set ylabel \"x_1\"");
+  gp.command("set key outside bottom center horizontal");
+  // The cells, the polyline and the solution points.
+  std::vector<std::string> plots;
+  plotCellBoxes(gp, cells, half, plots);
+  const std::string meshNote = plotPolyline(gp, t, r, run, plots);
+  std::vector<std::vector<double>> points;
+  for (std::size_t x = 0; x < cells.size(); ++x)
+    points.push_back({cells.number(x, "p0"), cells.number(x, "p1")});
   gp.data("points", points);
   plots.push_back("$points with points pt 7 ps 0.5 lc rgb \"#08306b\" title \"solution points\"");
   gp.command("plot " + join(plots, ", \\\n       "));
   a.gnuplot = gp.text();
+  // What it shows.
   const double normal = t.number(r, "cells.normal"), abnormal = t.number(r, "cells.abnormal");
   a.sentences.push_back("At depth " + t.cell(r, "depth") + " the subdivision keeps " +
                         std::to_string(cells.size()) + " cells of `" + t.cell(r, "problem") +
@@ -1481,6 +1681,83 @@ Artefact figCells(const std::string& id, const CsvTable& t, const std::filesyste
 
 // --- fig-app-*: the mesh of each application problem -------------------------------------------
 
+/// Per problem the successful run at the largest depth, when it has a mesh.ply.
+std::vector<std::size_t> applicationRuns(const CsvTable& t, const std::filesystem::path& dir) {
+  std::vector<std::size_t> picks;
+  for (const Group& g : groupBy(t, std::vector<std::string>{"problem"}, okRows(t))) {
+    std::size_t best = g.rows.front();
+    for (std::size_t r : g.rows)
+      if (t.number(r, "depth") > t.number(best, "depth")) best = r;
+    if (std::filesystem::exists(dir / "runs" / t.cell(best, "run") / "mesh.ply"))
+      picks.push_back(best);
+  }
+  return picks;
+}
+
+/// A mesh's segments or triangles as gnuplot polygons (a blank row after each).
+std::vector<std::vector<double>> meshPolygons(const PlyMesh& m) {
+  std::vector<std::vector<double>> rows;
+  for (const auto& s : m.simplices) {
+    for (int v : s) rows.push_back({m.xyz[v][0], m.xyz[v][1], m.xyz[v][2]});
+    rows.push_back({});
+  }
+  return rows;
+}
+
+/// What the mesh of run `r` is: vertices, simplices, topology, residual and time.
+std::string applicationSentence(const CsvTable& t, std::size_t r, const PlyMesh& mesh) {
+  const bool surface = t.cell(r, "k") != "1";
+  return "`" + t.cell(r, "problem") + "` (n = " + t.cell(r, "n") + ", depth " + t.cell(r, "depth") +
+         "): " + std::to_string(mesh.xyz.size()) + " vertices, " +
+         std::to_string(mesh.simplices.size()) + (surface ? " triangles" : " segments") + ", " +
+         t.cell(r, "mesh.components") + " component(s), Euler characteristic " +
+         t.cell(r, "mesh.euler_characteristic") +
+         (t.hasColumn("expect_euler_characteristic") &&
+                  !t.cell(r, "expect_euler_characteristic").empty()
+              ? " (expected " + t.cell(r, "expect_euler_characteristic") + ")"
+              : "") +
+         (surface ? ", " + t.cell(r, "mesh.boundary_edges") + " boundary and " +
+                        t.cell(r, "mesh.nonmanifold_edges") + " non-manifold edges"
+                  : "") +
+         ", largest residual " + formatNumber(t.number(r, "accuracy.max_residual"), 2) + ", " +
+         formatNumber(t.number(r, "timing_s.total"), 2) + " s.";
+}
+
+/// Plots the mesh of run `r` as panel `p` (with the application's input and ruled surfaces
+/// behind it); returns its sentence.
+std::string plotApplicationRun(GnuplotScript& gp, const CsvTable& t, std::size_t r, std::size_t p,
+                               const std::filesystem::path& run) {
+  const PlyMesh mesh = readPly(run / "mesh.ply");
+  const std::string name = "mesh" + std::to_string(p);
+  gp.data(name, meshPolygons(mesh));
+  // An application's input surfaces (input.ply) and ruled surface (ruled.ply, e.g. the
+  // convex hull's bitangent segments) are drawn behind the result, as in Figures 6-10.
+  std::string context;
+  for (const auto& [file, style] :
+       {std::pair<std::string, std::string>{"input",
+                                            "fs transparent solid 0.3 fc rgb "
+                                            "\"#969696\""},
+        std::pair<std::string, std::string>{"ruled",
+                                            "fs transparent solid 0.5 fc rgb "
+                                            "\"#fdae6b\""}}) {
+    if (!std::filesystem::exists(run / (file + ".ply"))) continue;
+    const std::string block = file + std::to_string(p);
+    gp.data(block, meshPolygons(readPly(run / (file + ".ply"))));
+    context += "$" + block + " with polygons " + style + ", ";
+  }
+  const bool curve = t.cell(r, "k") == "1";
+  gp.command("set title \"" + t.cell(r, "problem") + " (n = " + t.cell(r, "n") + ", depth " +
+             t.cell(r, "depth") + ")\"");
+  // Small meshes alone show their triangles; others are shaded by z only.
+  gp.command(mesh.simplices.size() < 4000 && context.empty()
+                 ? "set pm3d depthorder border lc rgb \"#3a6ea5\" lw 0.3"
+                 : "set pm3d depthorder noborder");
+  gp.command("splot " + context +
+             (curve ? "$" + name + " with lines lw 2 lc rgb \"#08519c\""
+                    : "$" + name + " with polygons fc palette z"));
+  return applicationSentence(t, r, mesh);
+}
+
 Artefact figApplication(const std::string& id, const CsvTable& t,
                         const std::filesystem::path& dir) {
   requireRunColumns(t);
@@ -1492,18 +1769,12 @@ Artefact figApplication(const std::string& id, const CsvTable& t,
   a.figure = true;
   a.title = "Application: " + id.substr(std::string("fig-app-").size());
   // Per problem the successful run at the largest depth.
-  std::vector<std::size_t> picks;
-  for (const Group& g : groupBy(t, std::vector<std::string>{"problem"}, okRows(t))) {
-    std::size_t best = g.rows.front();
-    for (std::size_t r : g.rows)
-      if (t.number(r, "depth") > t.number(best, "depth")) best = r;
-    if (std::filesystem::exists(dir / "runs" / t.cell(best, "run") / "mesh.ply"))
-      picks.push_back(best);
-  }
+  const std::vector<std::size_t> picks = applicationRuns(t, dir);
   if (picks.empty()) {
     a.sentences.push_back("No successful run with a mesh.ply, so there is no picture.");
     return a;
   }
+  // The canvas: up to three panels per row.
   const int columns = static_cast<int>(std::min<std::size_t>(picks.size(), 3));
   const int rowsCount = static_cast<int>((picks.size() + columns - 1) / columns);
   GnuplotScript gp(id, 500 * columns, 480 * rowsCount);
@@ -1518,62 +1789,11 @@ Artefact figApplication(const std::string& id, const CsvTable& t,
   gp.command("set palette defined (0 \"#08519c\", 1 \"#6baed6\", 2 \"#c6dbef\")");
   gp.command("unset colorbox");
   gp.command("unset key");
+  // One panel per run.
   for (std::size_t p = 0; p < picks.size(); ++p) {
     const std::size_t r = picks[p];
-    const std::filesystem::path run = dir / "runs" / t.cell(r, "run");
     a.shownRuns.push_back(t.cell(r, "run"));
-    const PlyMesh mesh = readPly(run / "mesh.ply");
-    const auto polygons = [](const PlyMesh& m) {
-      std::vector<std::vector<double>> rows;
-      for (const auto& s : m.simplices) {
-        for (int v : s) rows.push_back({m.xyz[v][0], m.xyz[v][1], m.xyz[v][2]});
-        rows.push_back({});
-      }
-      return rows;
-    };
-    const std::string name = "mesh" + std::to_string(p);
-    gp.data(name, polygons(mesh));
-    // An application's input surfaces (input.ply) and ruled surface (ruled.ply, e.g. the
-    // convex hull's bitangent segments) are drawn behind the result, as in Figures 6-10.
-    std::string context;
-    for (const auto& [file, style] :
-         {std::pair<std::string, std::string>{"input",
-                                              "fs transparent solid 0.3 fc rgb "
-                                              "\"#969696\""},
-          std::pair<std::string, std::string>{"ruled",
-                                              "fs transparent solid 0.5 fc rgb "
-                                              "\"#fdae6b\""}}) {
-      if (!std::filesystem::exists(run / (file + ".ply"))) continue;
-      const std::string block = file + std::to_string(p);
-      gp.data(block, polygons(readPly(run / (file + ".ply"))));
-      context += "$" + block + " with polygons " + style + ", ";
-    }
-    const bool curve = t.cell(r, "k") == "1";
-    gp.command("set title \"" + t.cell(r, "problem") + " (n = " + t.cell(r, "n") + ", depth " +
-               t.cell(r, "depth") + ")\"");
-    // Small meshes alone show their triangles; others are shaded by z only.
-    gp.command(mesh.simplices.size() < 4000 && context.empty()
-                   ? "set pm3d depthorder border lc rgb \"#3a6ea5\" lw 0.3"
-                   : "set pm3d depthorder noborder");
-    gp.command("splot " + context +
-               (curve ? "$" + name + " with lines lw 2 lc rgb \"#08519c\""
-                      : "$" + name + " with polygons fc palette z"));
-    const bool surface = !curve;
-    a.sentences.push_back(
-        "`" + t.cell(r, "problem") + "` (n = " + t.cell(r, "n") + ", depth " + t.cell(r, "depth") +
-        "): " + std::to_string(mesh.xyz.size()) + " vertices, " +
-        std::to_string(mesh.simplices.size()) + (surface ? " triangles" : " segments") + ", " +
-        t.cell(r, "mesh.components") + " component(s), Euler characteristic " +
-        t.cell(r, "mesh.euler_characteristic") +
-        (t.hasColumn("expect_euler_characteristic") &&
-                 !t.cell(r, "expect_euler_characteristic").empty()
-             ? " (expected " + t.cell(r, "expect_euler_characteristic") + ")"
-             : "") +
-        (surface ? ", " + t.cell(r, "mesh.boundary_edges") + " boundary and " +
-                       t.cell(r, "mesh.nonmanifold_edges") + " non-manifold edges"
-                 : "") +
-        ", largest residual " + formatNumber(t.number(r, "accuracy.max_residual"), 2) + ", " +
-        formatNumber(t.number(r, "timing_s.total"), 2) + " s.");
+    a.sentences.push_back(plotApplicationRun(gp, t, r, p, dir / "runs" / t.cell(r, "run")));
   }
   if (picks.size() > 1) gp.command("unset multiplot");
   a.gnuplot = gp.text();
@@ -1626,33 +1846,86 @@ Artefact genericTable(const std::string& id, const CsvTable& t) {
   return a;
 }
 
+/// What a builder gets: the experiment id and CSV, its results folder `results/<id>/`, and the
+/// directory of the paper's reference figures.
+struct BuildInput {
+  const std::string& id;
+  const CsvTable& csv;
+  const std::filesystem::path& dir;
+  const std::filesystem::path& reference;
+};
+
+/// The builder of one artefact id (or, with `prefix`, of every id that starts with it).
+struct Builder {
+  std::string_view id;
+  bool prefix;
+  Artefact (*build)(const BuildInput&);
+};
+
+/// Every artefact the report knows, in report order: the one place that maps ids to builders.
+/// Ids without a builder get genericTable.
+constexpr std::array<Builder, 9> kBuilders = {{
+    {"tab1-degeneracy", false,
+     [](const BuildInput& in) {
+       return tab1Degeneracy(in.id, in.csv, loadPaperTable1(in.reference));
+     }},
+    {"fig-degeneracy-vs-n", false,
+     [](const BuildInput& in) {
+       return figDegeneracyVsN(in.id, in.csv, loadPaperTable1(in.reference));
+     }},
+    {"tab-ablation-bounding", false,
+     [](const BuildInput& in) { return tabAblation(in.id, in.csv, "bounding"); }},
+    {"tab-ablation-subdivision", false,
+     [](const BuildInput& in) { return tabAblation(in.id, in.csv, "subdivision"); }},
+    {"tab-ablation-scalar", false,
+     [](const BuildInput& in) { return tabAblation(in.id, in.csv, "scalar"); }},
+    {"tab-connection", false, [](const BuildInput& in) { return tabConnection(in.id, in.csv); }},
+    {"fig-convergence", false, [](const BuildInput& in) { return figConvergence(in.id, in.csv); }},
+    {"fig-cells", false, [](const BuildInput& in) { return figCells(in.id, in.csv, in.dir); }},
+    {"fig-app-", true, [](const BuildInput& in) { return figApplication(in.id, in.csv, in.dir); }},
+}};
+
+/// The ids of kBuilders that name one artefact (not a prefix), in report order.
+constexpr auto kKnownArtefacts = [] {
+  constexpr std::size_t count = static_cast<std::size_t>(std::count_if(
+      kBuilders.begin(), kBuilders.end(), [](const Builder& b) { return !b.prefix; }));
+  std::array<std::string_view, count> ids{};
+  std::size_t i = 0;
+  for (const Builder& b : kBuilders)
+    if (!b.prefix) ids[i++] = b.id;
+  return ids;
+}();
+
+/// The builder registered for `id`; nullptr when there is none.
+const Builder* builderOf(std::string_view id) {
+  for (const Builder& b : kBuilders)
+    if (b.prefix ? id.starts_with(b.id) : id == b.id) return &b;
+  return nullptr;
+}
+
 }  // namespace
 
-std::span<const std::string_view> knownArtefacts() { return knownList(); }
+std::span<const std::string_view> knownArtefacts() { return kKnownArtefacts; }
 
-Artefact buildArtefact(const std::string& id, const CsvTable& csv,
-                       const std::filesystem::path& dir) {
-  Artefact a;
-  if (id == "tab1-degeneracy")
-    a = tab1Degeneracy(id, csv);
-  else if (id == "fig-degeneracy-vs-n")
-    a = figDegeneracyVsN(id, csv);
-  else if (id == "tab-ablation-bounding")
-    a = tabAblation(id, csv, "bounding");
-  else if (id == "tab-ablation-subdivision")
-    a = tabAblation(id, csv, "subdivision");
-  else if (id == "tab-ablation-scalar")
-    a = tabAblation(id, csv, "scalar");
-  else if (id == "tab-connection")
-    a = tabConnection(id, csv);
-  else if (id == "fig-convergence")
-    a = figConvergence(id, csv);
-  else if (id == "fig-cells")
-    a = figCells(id, csv, dir);
-  else if (id.starts_with("fig-app-"))
-    a = figApplication(id, csv, dir);
-  else
-    a = genericTable(id, csv);
+#ifndef NDC_SOURCE_DIR
+#define NDC_SOURCE_DIR ""
+#endif
+
+std::filesystem::path referenceDir(const std::filesystem::path& configs) {
+  std::filesystem::path dir = configs;
+  if (!dir.has_filename()) dir = dir.parent_path();  // "experiments/configs/"
+  const std::filesystem::path sibling = dir.parent_path() / "reference";
+  std::error_code error;
+  if (std::filesystem::is_directory(sibling, error)) return sibling;
+  const std::string source = NDC_SOURCE_DIR;
+  if (!source.empty()) return std::filesystem::path(source) / "experiments" / "reference";
+  return sibling;
+}
+
+Artefact buildArtefact(const std::string& id, const CsvTable& csv, const std::filesystem::path& dir,
+                       const std::filesystem::path& reference) {
+  const Builder* builder = builderOf(id);
+  Artefact a = builder ? builder->build({id, csv, dir, reference}) : genericTable(id, csv);
   a.runs = csv.size();
   a.failures = failedRuns(csv);
   return a;
@@ -1712,18 +1985,12 @@ std::string runsLine(const Artefact& a) {
          std::to_string(a.failures.size()) + " failed.";
 }
 
-}  // namespace
-
-ReportOutcome writeReport(const ReportSettings& settings, std::ostream& log) {
+/// The artefact ids in report order: the known ids, then the application figures, then every
+/// other id that has a config (`<configs>/<id>.toml`) or a CSV (`results/<id>/<id>.csv`), each
+/// group sorted.
+std::vector<std::string> artefactIds(const ReportSettings& settings) {
   namespace fs = std::filesystem;
-  if (!fs::is_directory(settings.results))
-    throw InputError(settings.results.string() +
-                     ": no such directory (run `ndcontour experiment` first)");
-  ReportOutcome outcome;
-
-  // The artefacts: the known ids, every config, every results/<id>/<id>.csv; known ones first
-  // in report order, then application figures, then the rest, each sorted.
-  std::vector<std::string> ids(knownList().begin(), knownList().end());
+  std::vector<std::string> ids(kKnownArtefacts.begin(), kKnownArtefacts.end());
   std::set<std::string> others;
   std::error_code error;
   if (fs::is_directory(settings.configs, error))
@@ -1737,158 +2004,214 @@ ReportOutcome writeReport(const ReportSettings& settings, std::ostream& log) {
       ids.push_back(id);
   for (const std::string& id : others)
     if (std::find(ids.begin(), ids.end(), id) == ids.end()) ids.push_back(id);
+  return ids;
+}
 
-  const bool render = settings.render && gnuplotAvailable();
-  if (settings.render && !render)
-    outcome.notes.push_back(
-        "gnuplot is not on PATH: the figure scripts (`<id>.gp`) are written "
-        "but not rendered.");
+/// One artefact's section of results/report.md.
+struct Section {
+  std::string id, status, body;
+  std::size_t runs = 0, failed = 0;
+  bool figure = false;
+};
 
-  struct Section {
-    std::string id, status, body;
-    std::size_t runs = 0, failed = 0;
-    bool figure = false;
-  };
-  std::vector<Section> sections;
-  for (const std::string& id : ids) {
+/// What writeReport shares between the artefacts.
+struct ReportRun {
+  const ReportSettings& settings;
+  std::filesystem::path reference;  ///< the paper's reference figures
+  bool render = false;              ///< gnuplot runs
+  ReportOutcome& outcome;
+  std::ostream& log;
+};
+
+/// Writes `<id>.md` and `<id>.tex` of a table artefact; returns its report.md body.
+std::string writeTableFiles(const Artefact& a, const std::filesystem::path& dir) {
+  writeAtomically(dir / (a.id + ".md"), artefactMarkdown(a));
+  writeAtomically(dir / (a.id + ".tex"), toLatex(a.tables.front()));
+  std::string body;
+  for (const Table& t : a.tables) body += t.caption + "\n\n" + toMarkdown(t) + "\n";
+  return body + paragraph(a.sentences) + "\n\n";
+}
+
+/// Application figures: each shown run rendered by the application's own script
+/// (experiments/gnuplot/<application>.gp, `gnuplot -e "dir='RUN'"` writes
+/// RUN/<application>.png), when there is one; returns the report.md lines.
+std::string applicationRunImages(const ReportRun& run, const Artefact& a,
+                                 const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  const std::string& id = a.id;
+  fs::path configs = run.settings.configs;
+  if (!configs.has_filename()) configs = configs.parent_path();
+  const std::string application = id.starts_with("fig-app-") ? id.substr(8) : "";
+  const fs::path script = configs.parent_path() / "gnuplot" / (application + ".gp");
+  if (!run.render || application.empty() || !fs::exists(script)) return "";
+  std::string body;
+  std::vector<std::string> failedScripts;
+  for (const std::string& shown : a.shownRuns) {
+    const fs::path runDir = fs::absolute(dir / "runs" / shown);
+    const std::string command = "gnuplot -e \"dir='" + runDir.string() + "'\" " +
+                                shellQuote(fs::absolute(script).string()) + " > " +
+                                shellQuote((runDir / (application + ".gnuplot.log")).string()) +
+                                " 2>&1";
+    if (std::system(command.c_str()) == 0 && fs::exists(runDir / (application + ".png")))
+      body += "![" + shown + "](" + id + "/runs/" + shown + "/" + application + ".png)\n\n";
+    else
+      failedScripts.push_back(shown);
+  }
+  if (!failedScripts.empty())
+    body += "The script " + script.string() + " failed on " + join(failedScripts, ", ") +
+            " (see `runs/<run>/" + application + ".gnuplot.log`).\n\n";
+  return body;
+}
+
+/// Writes `<id>.gp` of a figure and renders it; returns its report.md body. `renderNote` says
+/// why the figure was not rendered (empty when it was).
+std::string writeFigureFiles(const ReportRun& run, const Artefact& a,
+                             const std::filesystem::path& dir, std::string& renderNote) {
+  const std::string& id = a.id;
+  std::string body;
+  // The script, rendered when gnuplot is there.
+  if (!a.gnuplot.empty()) {
+    writeAtomically(dir / (id + ".gp"), a.gnuplot);
+    if (run.render) {
+      const std::string problem = renderGnuplot(dir, id);
+      if (!problem.empty()) {
+        run.outcome.errors.push_back(id + ": " + problem);
+        renderNote = "**Not rendered**: " + problem + ".";
+      }
+    } else {
+      renderNote = "*Not rendered (gnuplot is not on PATH)*; script: [" + id + ".gp](" + id + "/" +
+                   id + ".gp).";
+    }
+    if (renderNote.empty() || std::filesystem::exists(dir / (id + ".png")))
+      body += "![" + id + "](" + id + "/" + id + ".png)\n\n";
+    if (!renderNote.empty()) body += renderNote + "\n\n";
+  }
+  // The application's own pictures, what it shows, and the data tables.
+  body += applicationRunImages(run, a, dir);
+  body += paragraph(a.sentences) + "\n\n";
+  for (const Table& t : a.tables)
+    if (!t.rows.empty()) body += t.caption + "\n\n" + toMarkdown(t) + "\n";
+  return body;
+}
+
+/// "; code revision `abc`, quick grid, run DATE" from `provenance.json` of the runner: which
+/// code made the results, in which mode, when.
+std::string provenanceOrigin(const std::filesystem::path& provenance) {
+  std::ifstream in(provenance);
+  std::ostringstream read;
+  read << in.rdbuf();
+  const std::string text = read.str();
+  const std::string revision = jsonString(text, {"git_revision", "revision", "commit", "git"});
+  const std::string date = jsonString(text, {"date"});
+  std::string origin;
+  if (!revision.empty()) {
+    origin += "; code revision `";
+    origin += revision.substr(0, 12);
+    origin += '`';
+    if (text.find("\"dirty\": true") != std::string::npos) origin += " with uncommitted changes";
+  }
+  if (text.find("\"quick\": true") != std::string::npos) origin += ", quick grid";
+  if (text.find("\"quick\": false") != std::string::npos) origin += ", full grid";
+  if (!date.empty()) origin += ", run " + date;
+  return origin;
+}
+
+/// The "Files: ..." line of an artefact's section: links to its files and their provenance.
+std::string filesLine(const Artefact& a, const std::filesystem::path& dir) {
+  const std::string& id = a.id;
+  std::vector<std::string> files = {"[CSV](" + id + "/" + id + ".csv)"};
+  if (!a.figure) {
+    files.push_back("[Markdown](" + id + "/" + id + ".md)");
+    files.push_back("[LaTeX](" + id + "/" + id + ".tex)");
+  } else if (!a.gnuplot.empty()) {
+    files.push_back("[gnuplot](" + id + "/" + id + ".gp)");
+    if (std::filesystem::exists(dir / (id + ".pdf")))
+      files.push_back("[PDF](" + id + "/" + id + ".pdf)");
+  }
+  const std::filesystem::path provenance = dir / "provenance.json";
+  std::string origin;
+  if (std::filesystem::exists(provenance)) {
+    files.push_back("[provenance](" + id + "/provenance.json)");
+    origin = provenanceOrigin(provenance);
+  }
+  return "\nFiles: " + join(files, ", ") + origin + ".\n";
+}
+
+/// The section of an expected artefact without a CSV.
+Section missingSection(const ReportRun& run, const std::string& id,
+                       const std::filesystem::path& csvPath) {
+  const std::filesystem::path config = run.settings.configs / (id + ".toml");
+  Section section;
+  section.id = id;
+  section.figure = id.starts_with("fig");
+  run.outcome.missing.push_back(id);
+  section.status = "missing";
+  section.body =
+      "**Missing**: there is no `" + csvPath.string() + "`" +
+      (std::filesystem::exists(config) ? " (run `ndcontour experiment " + config.string() + "`)."
+                                       : " and no config `" + config.string() + "`.") +
+      "\n";
+  run.log << "report: " << id << ": missing (" << csvPath.string() << ")\n";
+  return section;
+}
+
+/// Builds one artefact from its CSV and writes its files; returns its section. Throws what
+/// reading, building or writing throws.
+Section artefactSection(const ReportRun& run, const std::string& id,
+                        const std::filesystem::path& dir, const std::filesystem::path& csvPath) {
+  // Build the artefact.
+  const CsvTable csv = readCsv(csvPath);
+  const Artefact a = buildArtefact(id, csv, dir, run.reference);
+  Section section;
+  section.id = id;
+  section.runs = a.runs;
+  section.failed = a.failures.size();
+  run.outcome.failedRuns += a.failures.size();
+  // Its files: the sentences for the paper, then the table or figure.
+  writeAtomically(dir / (id + "-summary.tex"), sentencesLatex(a.sentences));
+  std::string renderNote;
+  std::string body = a.figure ? writeFigureFiles(run, a, dir, renderNote) : writeTableFiles(a, dir);
+  // The runs, failures and file links.
+  body += runsLine(a);
+  if (!a.failures.empty()) {
+    body += " Failed runs:\n\n";
+    for (const std::string& f : a.failures) body += "- " + f + "\n";
+  }
+  body += "\n" + filesLine(a, dir);
+  section.status = !renderNote.empty() && run.render ? "not rendered"
+                   : a.failures.empty()              ? "ok"
+                                        : std::to_string(a.failures.size()) + " failed";
+  section.figure = a.figure;
+  section.body = "*" + a.title + ".*\n\n" + body;
+  run.outcome.written.push_back(id);
+  run.log << "report: " << id << ": " << a.runs << " runs, " << a.failures.size() << " failed\n";
+  return section;
+}
+
+/// The section of artefact `id`: missing, written, or an error (previous outputs kept).
+Section reportSection(const ReportRun& run, const std::string& id) {
+  const std::filesystem::path dir = run.settings.results / id;
+  const std::filesystem::path csvPath = dir / (id + ".csv");
+  if (!std::filesystem::exists(csvPath)) return missingSection(run, id, csvPath);
+  try {
+    return artefactSection(run, id, dir, csvPath);
+  } catch (const std::exception& e) {  // InputError, or a value the builder cannot use
+    run.outcome.errors.push_back(e.what());
     Section section;
     section.id = id;
     section.figure = id.starts_with("fig");
-    const fs::path dir = settings.results / id;
-    const fs::path csvPath = dir / (id + ".csv");
-    const bool hasConfig = fs::exists(settings.configs / (id + ".toml"));
-    if (!fs::exists(csvPath)) {
-      outcome.missing.push_back(id);
-      section.status = "missing";
-      section.body =
-          "**Missing**: there is no `" + csvPath.string() + "`" +
-          (hasConfig ? " (run `ndcontour experiment " +
-                           (settings.configs / (id + ".toml")).string() + "`)."
-                     : " and no config `" + (settings.configs / (id + ".toml")).string() + "`.") +
-          "\n";
-      log << "report: " << id << ": missing (" << csvPath.string() << ")\n";
-      sections.push_back(std::move(section));
-      continue;
-    }
-    try {
-      const CsvTable csv = readCsv(csvPath);
-      const Artefact a = buildArtefact(id, csv, dir);
-      section.runs = a.runs;
-      section.failed = a.failures.size();
-      outcome.failedRuns += a.failures.size();
-      std::string body;
-      std::string render_note;
-      // The sentences for the paper, beside the table or figure.
-      writeAtomically(dir / (id + "-summary.tex"), sentencesLatex(a.sentences));
-      if (!a.figure) {
-        writeAtomically(dir / (id + ".md"), artefactMarkdown(a));
-        writeAtomically(dir / (id + ".tex"), toLatex(a.tables.front()));
-        for (std::size_t i = 0; i < a.tables.size(); ++i)
-          body += a.tables[i].caption + "\n\n" + toMarkdown(a.tables[i]) + "\n";
-        body += paragraph(a.sentences) + "\n\n";
-      } else {
-        if (!a.gnuplot.empty()) {
-          writeAtomically(dir / (id + ".gp"), a.gnuplot);
-          if (render) {
-            const std::string problem = renderGnuplot(dir, id);
-            if (!problem.empty()) {
-              outcome.errors.push_back(id + ": " + problem);
-              render_note = "**Not rendered**: " + problem + ".";
-            }
-          } else {
-            render_note = "*Not rendered (gnuplot is not on PATH)*; script: [" + id + ".gp](" + id +
-                          "/" + id + ".gp).";
-          }
-          if (render_note.empty() || fs::exists(dir / (id + ".png")))
-            body += "![" + id + "](" + id + "/" + id + ".png)\n\n";
-          if (!render_note.empty()) body += render_note + "\n\n";
-        }
-        // Application figures: also each run rendered by the application's own script
-        // (experiments/gnuplot/<application>.gp, `gnuplot -e "dir='RUN'"` writes
-        // RUN/<application>.png), when there is one.
-        fs::path configs = settings.configs;
-        if (!configs.has_filename()) configs = configs.parent_path();
-        const std::string application = id.starts_with("fig-app-") ? id.substr(8) : "";
-        const fs::path script = configs.parent_path() / "gnuplot" / (application + ".gp");
-        if (render && !application.empty() && fs::exists(script)) {
-          std::vector<std::string> failedScripts;
-          for (const std::string& run : a.shownRuns) {
-            const fs::path runDir = fs::absolute(dir / "runs" / run);
-            const std::string command =
-                "gnuplot -e \"dir='" + runDir.string() + "'\" " +
-                shellQuote(fs::absolute(script).string()) + " > " +
-                shellQuote((runDir / (application + ".gnuplot.log")).string()) + " 2>&1";
-            if (std::system(command.c_str()) == 0 && fs::exists(runDir / (application + ".png")))
-              body += "![" + run + "](" + id + "/runs/" + run + "/" + application + ".png)\n\n";
-            else
-              failedScripts.push_back(run);
-          }
-          if (!failedScripts.empty())
-            body += "The script " + script.string() + " failed on " + join(failedScripts, ", ") +
-                    " (see `runs/<run>/" + application + ".gnuplot.log`).\n\n";
-        }
-        body += paragraph(a.sentences) + "\n\n";
-        for (const Table& t : a.tables)
-          if (!t.rows.empty()) body += t.caption + "\n\n" + toMarkdown(t) + "\n";
-      }
-      body += runsLine(a);
-      if (!a.failures.empty()) {
-        body += " Failed runs:\n\n";
-        for (const std::string& f : a.failures) body += "- " + f + "\n";
-      }
-      body += "\n";
-      std::vector<std::string> files = {"[CSV](" + id + "/" + id + ".csv)"};
-      if (!a.figure) {
-        files.push_back("[Markdown](" + id + "/" + id + ".md)");
-        files.push_back("[LaTeX](" + id + "/" + id + ".tex)");
-      } else if (!a.gnuplot.empty()) {
-        files.push_back("[gnuplot](" + id + "/" + id + ".gp)");
-        if (fs::exists(dir / (id + ".pdf"))) files.push_back("[PDF](" + id + "/" + id + ".pdf)");
-      }
-      const fs::path provenance = dir / "provenance.json";
-      std::string origin;
-      if (fs::exists(provenance)) {
-        files.push_back("[provenance](" + id + "/provenance.json)");
-        std::ifstream in(provenance);
-        std::ostringstream read;
-        read << in.rdbuf();
-        const std::string text = read.str();
-        // Which code made the results, in which mode, when (provenance.json of the runner).
-        const std::string revision =
-            jsonString(text, {"git_revision", "revision", "commit", "git"});
-        const std::string date = jsonString(text, {"date"});
-        if (!revision.empty()) {
-          origin += "; code revision `";
-          origin += revision.substr(0, 12);
-          origin += '`';
-          if (text.find("\"dirty\": true") != std::string::npos)
-            origin += " with uncommitted changes";
-        }
-        if (text.find("\"quick\": true") != std::string::npos) origin += ", quick grid";
-        if (text.find("\"quick\": false") != std::string::npos) origin += ", full grid";
-        if (!date.empty()) origin += ", run " + date;
-      }
-      body += "\nFiles: " + join(files, ", ") + origin + ".\n";
-      section.body = std::move(body);
-      section.status = !render_note.empty() && render ? "not rendered"
-                       : a.failures.empty()           ? "ok"
-                                            : std::to_string(a.failures.size()) + " failed";
-      section.figure = a.figure;
-      section.body = "*" + a.title + ".*\n\n" + section.body;
-      outcome.written.push_back(id);
-      log << "report: " << id << ": " << a.runs << " runs, " << a.failures.size() << " failed\n";
-      sections.push_back(std::move(section));
-    } catch (const std::exception& e) {  // InputError, or a value the builder cannot use
-      outcome.errors.push_back(e.what());
-      section.status = "error";
-      section.body = "**Could not be made**: " + std::string(e.what()) +
-                     " (previous outputs, if any, are left as they were).\n";
-      log << "report: " << id << ": error: " << e.what() << "\n";
-      sections.push_back(std::move(section));
-    }
+    section.status = "error";
+    section.body = "**Could not be made**: " + std::string(e.what()) +
+                   " (previous outputs, if any, are left as they were).\n";
+    run.log << "report: " << id << ": error: " << e.what() << "\n";
+    return section;
   }
+}
 
-  // results/report.md: overview, notes, then every artefact.
+/// results/report.md: overview, notes, then every artefact.
+std::string reportMarkdown(const ReportSettings& settings, const std::vector<Section>& sections,
+                           const ReportOutcome& outcome) {
+  // The introduction.
   std::string report = "# ndcontour: experiments report\n\n";
   report +=
       "Generated by `ndcontour report` from `" + settings.results.string() + "/<id>/<id>.csv`, " +
@@ -1897,37 +2220,65 @@ ReportOutcome writeReport(const ReportSettings& settings, std::ostream& log) {
                       : "full mode") +
       ". Every artefact has one id, the same in its config (`experiments/configs/<id>.toml`), "
       "its result files (`results/<id>/`) and the paper (`paper/ndcontour.tex`).\n\n";
+  // The overview table.
   Table overview;
   overview.columns = {"artefact", "kind", "runs", "failed", "status"};
   overview.align = "llrrl";
-  for (const Section& s : sections)
-    overview.rows.push_back(
-        {"[" + s.id + "](#" + s.id + ")", s.figure ? "figure" : "table",
-         s.status == "missing" || s.status == "error" ? std::string(kDash) : std::to_string(s.runs),
-         s.status == "missing" || s.status == "error" ? std::string(kDash)
-                                                      : std::to_string(s.failed),
-         s.status});
+  for (const Section& s : sections) {
+    const bool none = s.status == "missing" || s.status == "error";
+    overview.rows.push_back({"[" + s.id + "](#" + s.id + ")", s.figure ? "figure" : "table",
+                             none ? std::string(kDash) : std::to_string(s.runs),
+                             none ? std::string(kDash) : std::to_string(s.failed), s.status});
+  }
   report += toMarkdown(overview) + "\n";
+  // Missing experiments, failed runs, notes and errors.
   if (!outcome.missing.empty())
     report += "Missing experiments: " + join(outcome.missing, ", ") + ".\n\n";
   report += "Failed runs over all experiments: " + std::to_string(outcome.failedRuns) +
             " (each is named in its section).\n\n";
   for (const std::string& note : outcome.notes) report += "Note: " + note + "\n\n";
   for (const std::string& e : outcome.errors) report += "Error: " + e + "\n\n";
+  // Every artefact.
   for (const Section& s : sections) report += "## " + s.id + "\n\n" + s.body + "\n";
-  writeAtomically(settings.results / "report.md", report);
+  return report;
+}
 
-  // results/applications.tex: one figure per application for the paper (it cannot know the
-  // application ids in advance); paper/ndcontour.tex defines \artefactfigure.
+/// results/applications.tex: one figure per application for the paper (it cannot know the
+/// application ids in advance); paper/ndcontour.tex defines \artefactfigure.
+std::string applicationsLatex(const ReportOutcome& outcome) {
   std::string applications =
       "% Generated by `ndcontour report`: one figure per fig-app-* artefact; do not edit.\n";
   for (const std::string& id : outcome.written)
     if (id.starts_with("fig-app-"))
       applications += "\\artefactfigure{" + id + "}{" + latexEscape(id.substr(8)) + " (" +
                       latexEscape(id) + "): the mesh in R\\textsuperscript{3}.}\n";
-  writeAtomically(settings.results / "applications.tex", applications);
+  return applications;
+}
+
+}  // namespace
+
+ReportOutcome writeReport(const ReportSettings& settings, std::ostream& log) {
+  if (!std::filesystem::is_directory(settings.results))
+    throw InputError(settings.results.string() +
+                     ": no such directory (run `ndcontour experiment` first)");
+  ReportOutcome outcome;
+  // Whether gnuplot renders the figures.
+  ReportRun run{settings,
+                settings.reference.empty() ? referenceDir(settings.configs) : settings.reference,
+                settings.render && gnuplotAvailable(), outcome, log};
+  if (settings.render && !run.render)
+    outcome.notes.push_back(
+        "gnuplot is not on PATH: the figure scripts (`<id>.gp`) are written "
+        "but not rendered.");
+
+  // Every artefact, then the report and the applications' figure list.
+  std::vector<Section> sections;
+  for (const std::string& id : artefactIds(settings)) sections.push_back(reportSection(run, id));
+  writeAtomically(settings.results / "report.md", reportMarkdown(settings, sections, outcome));
+  writeAtomically(settings.results / "applications.tex", applicationsLatex(outcome));
   log << "report: wrote " << (settings.results / "report.md").string() << "\n";
 
+  // The exit status.
   bool badInput = false;
   for (const Section& s : sections) badInput |= s.status == "error";
   outcome.status = badInput ? 2

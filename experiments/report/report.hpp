@@ -6,6 +6,15 @@
 /// `<id>.png` and `<id>.pdf`, the sentences computed from the data as `<id>-summary.tex`, one
 /// `results/applications.tex` listing the application figures, and one `results/report.md`
 /// with every artefact. The paper (`paper/ndcontour.tex`) includes only these files.
+///
+/// The numbers of the paper (Seong, Elber and Kim 2005) that the artefacts set beside ours are
+/// data, not code: they are read at run time from the reference directory, by default the
+/// sibling `reference/` of the configs directory (`experiments/reference/` for the default
+/// `experiments/configs`; see referenceDir). `table1.toml` holds the paper's Table 1 (used by
+/// `tab1-degeneracy` and `fig-degeneracy-vs-n`). A missing or malformed reference file makes
+/// that artefact fail with a one-line ndc::InputError naming the file.
+///
+/// Each known artefact id has one builder, registered in one table in report.cpp (kBuilders).
 #pragma once
 
 #include <array>
@@ -17,6 +26,8 @@
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "framework/core/io.hpp"
 
 namespace ndc::report {
 
@@ -165,17 +176,10 @@ std::string renderGnuplot(const std::filesystem::path& dir, const std::string& i
 
 // --- Reading run outputs -----------------------------------------------------------------------
 
-/// A mesh read from an ASCII `mesh.ply` (docs/contracts.md 4.4): per vertex `x y z` and the point
-/// in R^n, and segments (k = 1) or triangles (k = 2) as vertex indices.
-struct PlyMesh {
-  std::vector<std::array<double, 3>> xyz;   ///< the 3-D image of each vertex
-  std::vector<std::vector<double>> u;       ///< the point in R^n of each vertex
-  std::vector<std::vector<int>> simplices;  ///< segments or triangles
-};
-
-/// Reads an ASCII PLY written by `ndcontour solve`; throws InputError when it is malformed,
-/// binary, or lacks `x y z`.
-PlyMesh readPly(const std::filesystem::path& file);
+/// The PLY reader lives in core beside the writer (framework/core/io.hpp); these names keep
+/// `ndc::report::PlyMesh` and `ndc::report::readPly` working.
+using ndc::PlyMesh;
+using ndc::readPly;
 
 // --- The report --------------------------------------------------------------------------------
 
@@ -192,13 +196,21 @@ struct Artefact {
   std::vector<std::string> shownRuns;  ///< figures: the runs (`runs/<run>/`) the figure shows
 };
 
+/// The directory of the paper's reference figures (`table1.toml`, ...) for the configs
+/// directory `configs`: its sibling `../reference` (e.g. `experiments/reference` for
+/// `experiments/configs`) when that is a directory; otherwise `experiments/reference` of the
+/// source tree this program was built from (configs outside the repository, e.g. in tests).
+std::filesystem::path referenceDir(const std::filesystem::path& configs = "experiments/configs");
+
 /// Builds the artefact of experiment `id` from its CSV; `dir` is `results/<id>/` (for the
-/// per-run files a figure may read: `runs/<run>/cells.csv`, `runs/<run>/mesh.ply`). Known ids
+/// per-run files a figure may read: `runs/<run>/cells.csv`, `runs/<run>/mesh.ply`) and
+/// `reference` the directory of the paper's reference figures (see referenceDir). Known ids
 /// (`tab1-degeneracy`, `fig-degeneracy-vs-n`, `tab-ablation-*`, `tab-connection`,
 /// `fig-convergence`, `fig-cells`, `fig-app-*`) get their own tables, figures and sentences;
-/// any other id a table with one row per run. Throws InputError for a missing column.
-Artefact buildArtefact(const std::string& id, const CsvTable& csv,
-                       const std::filesystem::path& dir);
+/// any other id a table with one row per run. Throws InputError for a missing column or a
+/// missing or malformed reference file.
+Artefact buildArtefact(const std::string& id, const CsvTable& csv, const std::filesystem::path& dir,
+                       const std::filesystem::path& reference = referenceDir());
 
 /// Settings of writeReport.
 struct ReportSettings {
@@ -206,6 +218,8 @@ struct ReportSettings {
   std::filesystem::path configs = "experiments/configs";  ///< `<id>.toml`: the expected ids
   bool quick = false;                                     ///< said so in the report
   bool render = true;  ///< run gnuplot for figures when it is on PATH
+  /// The paper's reference figures (`table1.toml`); empty: referenceDir(configs).
+  std::filesystem::path reference;
 };
 
 /// What writeReport did.

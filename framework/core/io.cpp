@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -462,6 +463,90 @@ std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const Ru
   // The run is published: a timeout held back until here has nothing left to stop.
   cleanup.published = 1;
   return names;
+}
+
+// --- Reading meshes back ---------------------------------------------------------------------
+
+PlyMesh readPly(const std::filesystem::path& file) {
+  std::ifstream stream(file, std::ios::binary);
+  if (!stream) throw InputError(file.string() + ": cannot read the file");
+  std::ostringstream text;
+  text << stream.rdbuf();
+  std::istringstream in(text.str());
+  const auto fail = [&](const std::string& message) {
+    throw InputError(file.string() + ": " + message);
+  };
+  std::string line;
+  if (!std::getline(in, line) || line != "ply") fail("not a PLY file");
+  struct Element {
+    std::string name;
+    std::size_t count = 0;
+    std::vector<std::string> properties;
+    bool list = false;
+  };
+  std::vector<Element> elements;
+  bool ascii = false;
+  while (std::getline(in, line)) {
+    std::istringstream words(line);
+    std::string word;
+    words >> word;
+    if (word == "end_header") break;
+    if (word == "format") {
+      std::string format;
+      words >> format;
+      ascii = format == "ascii";
+    } else if (word == "element") {
+      Element e;
+      words >> e.name >> e.count;
+      elements.push_back(e);
+    } else if (word == "property") {
+      if (elements.empty()) fail("property before element");
+      std::string type, name;
+      words >> type;
+      if (type == "list") {
+        std::string countType, itemType;
+        words >> countType >> itemType;
+        elements.back().list = true;
+      }
+      words >> name;
+      elements.back().properties.push_back(name);
+    }
+  }
+  if (!ascii) fail("only ASCII PLY is read");
+  PlyMesh mesh;
+  for (const Element& e : elements) {
+    for (std::size_t i = 0; i < e.count; ++i) {
+      if (!std::getline(in, line)) fail("ends inside element '" + e.name + "'");
+      std::istringstream words(line);
+      if (e.name == "vertex") {
+        std::map<std::string, double> value;
+        for (const std::string& p : e.properties) {
+          double v = 0;
+          if (!(words >> v)) fail("bad vertex line: " + line);
+          value[p] = v;
+        }
+        if (!value.count("x") || !value.count("y") || !value.count("z"))
+          fail("vertex lacks x, y or z");
+        mesh.xyz.push_back({value["x"], value["y"], value["z"]});
+        std::vector<double> u;
+        for (int j = 0; value.count("u" + std::to_string(j)); ++j)
+          u.push_back(value["u" + std::to_string(j)]);
+        mesh.u.push_back(std::move(u));
+      } else if (e.name == "edge" || e.name == "face") {
+        std::vector<int> s;
+        int count = 2;
+        if (e.list && !(words >> count)) fail("bad " + e.name + " line: " + line);
+        for (int j = 0; j < count; ++j) {
+          int v = 0;
+          if (!(words >> v) || v < 0 || static_cast<std::size_t>(v) >= mesh.xyz.size())
+            fail("bad " + e.name + " line: " + line);
+          s.push_back(v);
+        }
+        mesh.simplices.push_back(std::move(s));
+      }
+    }
+  }
+  return mesh;
 }
 
 }  // namespace ndc

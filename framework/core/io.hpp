@@ -1,8 +1,9 @@
 /// \file io.hpp
-/// Output files of a run (docs/contracts.md 4.3-4.5): summary.json, mesh.ply, cells.csv and
-/// singular.csv.
+/// Output files of a run (docs/contracts.md 4.3-4.5): summary.json, mesh.ply, cells.csv,
+/// singular.csv and uncertified.csv; and the PLY reader the report uses (readPly).
 #pragma once
 
+#include <array>
 #include <filesystem>
 #include <ostream>
 #include <string>
@@ -63,5 +64,20 @@ void armTimeout(double seconds, const std::string& line, int status);
 
 /// Stops the limit of armTimeout: the run is finished and only prints what it found.
 void disarmTimeout();
+
+/// A mesh read back from an ASCII `mesh.ply` (docs/contracts.md 4.4): per vertex `x y z` and the
+/// point in R^n (`u0 .. u{n-1}`), and segments (k = 1) or triangles (k = 2) as vertex indices.
+struct PlyMesh {
+  std::vector<std::array<double, 3>> xyz;   ///< the 3-D image of each vertex
+  std::vector<std::vector<double>> u;       ///< the point in R^n of each vertex
+  std::vector<std::vector<int>> simplices;  ///< segments or triangles
+};
+
+/// Reads an ASCII PLY as writePly writes it (e.g. `mesh.ply` of `ndcontour solve`): the `vertex`
+/// element's `x y z` and `u0, u1, ..` properties, and `edge` or `face` elements (lists or pairs
+/// of vertex indices); other elements are skipped. Throws ndc::InputError (`FILE: message`) when
+/// the file cannot be read, is not PLY, is binary, ends early, has a bad line or an index out
+/// of range, or its vertices lack `x y z`.
+PlyMesh readPly(const std::filesystem::path& file);
 
 }  // namespace ndc
