@@ -1,217 +1,1979 @@
-/// \file crossing.cpp
-/// The crossing connection, phase 5 and entry point: the per-leaf state, the pieces of M in each
-/// leaf, the dual vertices and simplices, and CrossingConnection::connect.
 #include "strategies/connection/crossing.hpp"
 
-#include <algorithm>
-#include <numeric>
+#include <Eigen/Dense>
+#include <boost/multiprecision/eigen.hpp>
 
-#include "strategies/connection/crossing_detail.hpp"
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <sstream>
+#include <unordered_map>
+#include <vector>
+
+#include "framework/core/bernstein.hpp"
+#include "framework/core/interval.hpp"
+#include "strategies/connection/cell_tree.hpp"
+#include "strategies/connection/certificate.hpp"
 
 namespace ndc {
-namespace crossing_detail {
+namespace {
 
 template <class S>
-AdaptiveCrossing<S>::AdaptiveCrossing(const ConnectionInput<S>& in, int maxFaceDepth)
-    : in_(in),
-      grid_(in.cells.grid),
-      n_(grid_.n),
-      k_(in.k),
-      m_(n_ - k_),
-      maxFaceDepth_(maxFaceDepth),
-      position_(in, grid_),
-      graphTest_(grid_.n, grid_.n - in.k),
-      tree_(grid_, std::max(grid_.depth, in.refine ? in.maxLevel : grid_.depth)) {
-  domain_ = toScalar<S>(grid_.domain);
-  for (int a = 0; a < n_; ++a) {
-    if (k_ == 1) fixedAxes_.push_back({a, -1});
-    for (int b = a + 1; k_ == 2 && b < n_; ++b) fixedAxes_.push_back({a, b});
-  }
-  // Refinement stops before this many leaves: thin features need a few times the base
-  // cells (genus2 at depth 5: 8x, the thin torus at depth 3: 50x, so at least 65536 in
-  // R^3); where refinement cannot succeed (tangency along a curve, graph tests that fail on
-  // every cell) it bounds the cost. A leaf costs more and a refinement makes 2^n of them as
-  // n grows, so the floor shrinks by 16 per dimension, to 4096 from R^4 on.
-  maxLeaves_ = std::max<std::size_t>(16 * in.cells.size(),
-                                     std::size_t{1} << std::max(12, 16 - 4 * (grid_.n - 3)));
-  // A chord error the user asks for (--tolerance) may need many more: up to 2^22 leaves
-  // (a few hundred MB); the CLI warns when the tolerance is not reached.
-  if (in.tolerance > 0) maxLeaves_ = std::max<std::size_t>(maxLeaves_, std::size_t{1} << 22);
-}
-
+using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
 template <class S>
-void AdaptiveCrossing<S>::grow() {
-  const std::size_t size = tree_.size();
-  if (empty_.size() >= size) return;
-  trouble_.resize(size * n_, S(0));
-  hasTrouble_.resize(size, 0);
-  empty_.resize(size, -1);
-  bandEmpty_.resize(size, 0);
-  unproven_.resize(size, 0);
-  stuck_.resize(size, 0);
-  singular_.resize(size, 0);
-  graph_.resize(size, -1);
-  faceGraph_.resize(size, -1);
-  failure_.resize(size, Failure::kNone);
-}
+using Vector = Eigen::Matrix<S, Eigen::Dynamic, 1>;
 
+/// Outcome of the Krawczyk test on a face box.
+enum class Krawczyk { kUnique, kNone, kUnknown };
+
+/// Which ends of a face's free axes lie on the domain boundary. There the face has no
+/// neighbour to share a crossing with, so it is closed, and it keeps crossings up to `slack`
+/// outside (the perturbed level set F = c leaves the domain by that much where M touches it).
+struct FaceEnds {
+  std::vector<bool> lower, upper;
+};
+
+/// Finds the crossings of the level set F = c with one m-face: the roots of the m constraints
+/// minus the level c (docs/crossing.md, "General position"), restricted to the face, a square
+/// system in the face's m free variables. For m = 1 the level is 0 and the sign rule decides.
 template <class S>
-void AdaptiveCrossing<S>::buildComplex(ConnectionOutput<S>& out) {
-  collapseBlocks(out.topology.certified);
-  const std::size_t count = tree_.size();
-  std::vector<std::int32_t> mesh;
-  for (std::size_t p = 0; p < polygons_.size(); ++p) {
-    if (!polygons_[p].outside) mesh.push_back(static_cast<std::int32_t>(p));
+class FaceSolver {
+ public:
+  FaceSolver(const System<S>& system, int maxDepth, std::vector<S> level, S slack)
+      : system_(system),
+        n_(system.n()),
+        m_(system.m()),
+        maxDepth_(maxDepth),
+        level_(std::move(level)),
+        slack_(std::move(slack)) {
+    f_.resize(m_);
+    jacobian_.resize(std::size_t(m_) * n_);
   }
-  std::vector<std::vector<std::int32_t>> incident(count);
-  for (std::int32_t p : mesh) {
-    for (int i = 0; i < polygons_[p].size; ++i) incident[polygons_[p].node[i]].push_back(p);
-  }
-  const auto slotOf = [&](std::int32_t p, std::size_t c) {
-    int at = 0;
-    while (polygons_[p].node[at] != static_cast<std::int64_t>(c)) ++at;
-    return at;
-  };
-  // piece[p * 4 + i]: the piece of M in leaf node[i] that polygon p belongs to.
-  std::vector<std::int32_t> piece(polygons_.size() * 4, 0), pieceCount(count, 0);
-  for (std::size_t c = 0; c < count; ++c)
-    pieceCount[c] = pieces(c, incident[c], piece, slotOf, out);
-  // Dual vertices: the Newton projection of the mean of each piece's crossings.
-  std::vector<std::int32_t> firstVertex(count, -1);
-  std::vector<S> sums, x(n_);
-  std::vector<std::int32_t> counts;
-  for (std::size_t c = 0; c < count; ++c) {
-    if (pieceCount[c] == 0) continue;
-    const S width = S(tree_.grid(tree_.level(c)).cellWidth(0));
-    sums.assign(std::size_t(pieceCount[c]) * n_, S(0));
-    counts.assign(pieceCount[c], 0);
-    for (std::int32_t p : incident[c]) {
-      const std::int32_t q = piece[p * 4 + slotOf(p, c)];
-      for (int j = 0; j < n_; ++j)
-        sums[std::size_t(q) * n_ + j] += rootPoints_[std::size_t(polygons_[p].root) * n_ + j];
-      ++counts[q];
+
+  /// Solves on the face whose fixed coordinates are given in `point` (free ones are
+  /// overwritten); `patches` are the face slices of F (m variables, domain = the face box),
+  /// shifted here by the level; `ends` marks the free axes' domain ends. Appends the roots
+  /// (full n-dim points) to `roots`; returns false if some root could not be proven unique.
+  /// `margins[i]`: coefficients of F_i smaller than this in magnitude may have the wrong sign
+  /// (the rounding bound of the Bernstein forms, docs/certificate.md).
+  bool solve(std::vector<S> point, std::vector<int> freeAxes, std::vector<Bernstein<S>>& patches,
+             FaceEnds ends, std::vector<std::vector<S>>& roots, std::span<const S> margins) {
+    point_ = std::move(point);
+    free_ = std::move(freeAxes);
+    margins_ = margins;
+    certain_ = true;
+    proven_ = true;
+    withinRounding_ = false;
+    boxes_ = 0;
+    if (m_ == 1) {
+      edge(patches.front().domain(), roots);
+      proven_ = edgeProven(patches.front());
+      return true;
     }
-    for (int q = 0; q < pieceCount[c]; ++q) {
-      for (int j = 0; j < n_; ++j) x[j] = sums[std::size_t(q) * n_ + j] / counts[q];
-      const std::vector<S> mean = x;
-      if (!in_.project(x).converged) {
-        // Reported, never written silently off M (the analysis measures its residual too).
-        x = mean;
-        ++out.offManifoldVertices;
+    for (int i = 0; i < m_; ++i) {
+      for (S& c : patches[i].coefficients()) c -= level_[i];
+    }
+    recurse(patches, ends, 0, roots);
+    return certain_;
+  }
+
+  /// Whether every decision of the last solve is a proof: exclusions by coefficient signs
+  /// beyond the rounding margin or by interval evaluation, uniqueness and existence by the
+  /// Krawczyk test in interval arithmetic, edge signs by interval values.
+  bool proven() const { return proven_ && certain_; }
+  /// Whether an exclusion of the last solve was left unproven because F comes within rounding
+  /// of zero on the face (M touches it): no finer face can prove it either.
+  bool withinRounding() const { return withinRounding_; }
+
+ private:
+  void recurse(const std::vector<Bernstein<S>>& patches, const FaceEnds& ends, int depth,
+               std::vector<std::vector<S>>& roots) {
+    //! [crossing-face]
+    // Exclusion: a coefficient hull of one sign on the face means no root.
+    const Box<S>& box = patches.front().domain();
+    for (std::size_t i = 0; i < patches.size(); ++i) {
+      if (!patches[i].excludesZero()) continue;
+      // The exclusion is a proof when every coefficient clears the rounding margin, or when
+      // interval evaluation confirms it; otherwise the decision stands but is not proven.
+      if (!clearsRange(patches[i], S(0), S(0), margins_[i]) && !intervalExcludes(box, int(i)))
+        proven_ = false, withinRounding_ = true;
+      return;
+    }
+    std::vector<S> root;
+    const bool found = newton(box, root) && inside(box, ends, root);
+    const Krawczyk k = krawczyk(patches);
+    if (k == Krawczyk::kNone) return;
+    if (found && (k == Krawczyk::kUnique || krawczykAround(root, box) == Krawczyk::kUnique)) {
+      roots.push_back(fullPoint(root));
+      return;
+    }
+    if (k == Krawczyk::kUnique && !found) {
+      // The unique root lies in the closed face; if Newton did not reach it inside the
+      // half-open face, it is on an upper boundary owned by the next face, or Newton strayed.
+      std::vector<S> y;
+      if (newton(box, y) && insideClosed(box, y)) {
+        proven_ = false;  // K proves the root interior, Newton puts it on the boundary
+        return;           // owned by the neighbour face
       }
-      const std::int32_t v = out.complex.addVertex(x, tree_.baseCell(std::int32_t(c)));
-      if (q == 0) firstVertex[c] = v;
-      // Singular cells: the Jacobian at the vertex is (nearly) rank-deficient relative to
-      // the cell size, as at self-intersections and cone points.
-      const Vector<S> sigma = singularValuesAt<S>(in_.system, x);
-      if (q == 0 && (singular_[c] || sigma(0) == 0 || sigma(m_ - 1) <= sigma(0) * width * 1e-3))
-        ++out.singularCells;
+      // Newton failed, but K inside int X proves one root strictly inside this box (so inside
+      // the half-open face): keep it, at the box centre (a fold of F = c, where the face
+      // Jacobian is nearly singular, can stall Newton's convergence test).
+      for (int j = 0; j < m_; ++j) y[j] = (box.lo[j] + box.hi[j]) / 2;
+      roots.push_back(fullPoint(y));
+      return;
+    }
+    // Undecided at the smallest face size, or after the face's budget of boxes (where F = c
+    // has a continuum of roots on the face, as on a degenerate surface patch, the recursion
+    // would otherwise visit up to 2^(maxDepth m) boxes): keep Newton's root, flag the face
+    // uncertain.
+    if (depth >= maxDepth_ * m_ || ++boxes_ > kMaxBoxes) {
+      certain_ = false;
+      if (found) roots.push_back(fullPoint(root));
+      return;
+    }
+    // Subdivide the face along its free axes in turn (half-open children).
+    const int axis = depth % m_;
+    std::vector<Bernstein<S>> lower(patches.size()), upper(patches.size());
+    for (std::size_t i = 0; i < patches.size(); ++i) patches[i].halve(axis, lower[i], upper[i]);
+    FaceEnds lowerEnds = ends, upperEnds = ends;
+    lowerEnds.upper[axis] = false;
+    upperEnds.lower[axis] = false;
+    recurse(lower, lowerEnds, depth + 1, roots);
+    recurse(upper, upperEnds, depth + 1, roots);
+    //! [crossing-face]
+  }
+
+  /// m = 1 (hypersurfaces, k = n - 1): the face is a grid edge, and the parity of its roots is
+  /// the sign change of F between its ends (sign 0 counts as +), exactly as in 3-D dual
+  /// contouring. The grid vertices are shared by all their edges, so the result is closed
+  /// whatever the roots inside do. An odd edge gets one crossing, found by safeguarded Newton.
+  void edge(const Box<S>& box, std::vector<std::vector<S>>& roots) {
+    using std::abs;
+    std::vector<S> x = point_;
+    const auto value = [&](const S& t) {
+      x[free_[0]] = t;
+      system_.evaluate(x, f_, jacobian_);
+      return f_[0];
+    };
+    S a = box.lo[0], b = box.hi[0];
+    const S fa = value(a), fb = value(b);
+    const bool negativeA = fa < 0, negativeB = fb < 0;
+    if (negativeA == negativeB) return;
+    // Keep a bracket [a, b] with the sign change; Newton steps that leave it are bisections.
+    S t = (a + b) / 2;
+    const S eps = ScalarTraits<S>::epsilon();
+    for (int iteration = 0; iteration < 200; ++iteration) {
+      const S ft = value(t);
+      if (ft == 0) break;
+      if ((ft < 0) == negativeA) {
+        a = t;
+      } else {
+        b = t;
+      }
+      const S slope = jacobian_[free_[0]];
+      S next = slope != 0 ? t - ft / slope : (a + b) / 2;
+      if (!(next > a && next < b)) next = (a + b) / 2;
+      const S step = abs(next - t);
+      t = next;
+      if (step <= 4 * eps * (1 + abs(t)) || b - a <= 4 * eps * (1 + abs(t))) break;
+    }
+    x[free_[0]] = t;
+    roots.push_back(x);
+  }
+
+  /// The sign rule on an edge is a proof when the signs of F at both ends are (the end
+  /// coefficients clear the rounding margin, or interval values exclude 0 or are exactly 0,
+  /// which counts as +) and the edge holds at most one root of F: the coefficients, or the
+  /// differences of consecutive ones (the derivative), have one strict sign.
+  bool edgeProven(const Bernstein<S>& patch) const {
+    using I = Interval<S>;
+    const S& margin = margins_[0];
+    const auto c = patch.coefficients();
+    std::vector<I> x;
+    x.reserve(n_);
+    for (int j = 0; j < n_; ++j) x.emplace_back(point_[j]);
+    const Box<S>& box = patch.domain();
+    for (int end = 0; end < 2; ++end) {
+      using std::abs;
+      if (abs(end ? c.back() : c.front()) > margin) continue;
+      x[free_[0]] = I(end ? box.hi[0] : box.lo[0]);
+      const I v = system_.equations()[0].template evaluate<S>(std::span<const I>(x));
+      if (v.containsZero() && !(v.lower() == 0 && v.upper() == 0)) return false;
+    }
+    if (clearsRange(patch, S(0), S(0), margin)) return true;
+    if (!derivativeHull(patch, 0, margin).containsZero()) return true;
+    // Monotone or root-free pieces with at most one sign change in all: as where the edge
+    // ends on a plane of symmetry of F (dF = 0 there, the root lies inside).
+    int pieces = 64;  // F = 0 along the whole edge would otherwise halve it 2^12 times
+    const int roots = provenRoots(patch, 0, pieces);
+    if (roots == 0 || roots == 1) return true;
+    // F >= 0 on the whole edge (it may touch 0, as along a line of M on a grid line): the
+    // level set F = -delta of the sign rule does not meet it.
+    x[free_[0]] = I(box.lo[0], box.hi[0]);
+    const I v = system_.equations()[0].template evaluate<S>(std::span<const I>(x));
+    return v.lower() >= 0 || v.upper() < 0;
+  }
+
+  /// The number of roots of F on the edge patch, proven by halving into pieces that are root
+  /// free (coefficients clear 0) or monotone (derivative hull clears 0; then the end signs
+  /// count the root); -1 when a piece stays undecided at 2^-kMaxEdgeDepth of the edge or
+  /// after `pieces` pieces.
+  int provenRoots(const Bernstein<S>& patch, int depth, int& pieces) const {
+    constexpr int kMaxEdgeDepth = 12;
+    const S& margin = margins_[0];
+    if (clearsRange(patch, S(0), S(0), margin)) return 0;
+    if (!derivativeHull(patch, 0, margin).containsZero()) {
+      using std::abs;
+      const auto c = patch.coefficients();
+      if (abs(c.front()) <= margin || abs(c.back()) <= margin) return -1;
+      return (c.front() < 0) != (c.back() < 0) ? 1 : 0;
+    }
+    if (depth >= kMaxEdgeDepth || --pieces < 0) return -1;
+    Bernstein<S> lower, upper;
+    patch.halve(0, lower, upper);
+    const int a = provenRoots(lower, depth + 1, pieces);
+    if (a < 0) return -1;
+    const int b = provenRoots(upper, depth + 1, pieces);
+    return b < 0 ? -1 : a + b;
+  }
+
+  std::vector<S> fullPoint(const std::vector<S>& y) const {
+    std::vector<S> x = point_;
+    for (int j = 0; j < m_; ++j) x[free_[j]] = y[j];
+    return x;
+  }
+
+  bool insideClosed(const Box<S>& box, const std::vector<S>& y) const {
+    for (int j = 0; j < m_; ++j) {
+      if (y[j] < box.lo[j] || y[j] > box.hi[j]) return false;
+    }
+    return true;
+  }
+
+  /// Half-open `[lo, hi)` inside the grid, closed and widened by the slack at domain ends.
+  bool inside(const Box<S>& box, const FaceEnds& ends, const std::vector<S>& y) const {
+    for (int j = 0; j < m_; ++j) {
+      if (ends.lower[j] ? y[j] < box.lo[j] - slack_ : y[j] < box.lo[j]) return false;
+      if (ends.upper[j] ? y[j] > box.hi[j] + slack_ : y[j] >= box.hi[j]) return false;
+    }
+    return true;
+  }
+
+  /// Square Newton on the face from its centre, damped (the step is halved until the residual
+  /// drops, and the iterate stays within two face widths), so that it also converges near a
+  /// fold of M where the face Jacobian is nearly singular; true if it converged.
+  bool newton(const Box<S>& box, std::vector<S>& y) {
+    using std::abs;
+    using std::sqrt;
+    y.resize(m_);
+    S width = 0;
+    for (int j = 0; j < m_; ++j) {
+      y[j] = (box.lo[j] + box.hi[j]) / 2;
+      width = std::max<S>(width, box.hi[j] - box.lo[j]);
+    }
+    const S eps = ScalarTraits<S>::epsilon();
+    Matrix<S> jf(m_, m_);
+    Vector<S> rhs(m_);
+    std::vector<S> x = point_, trial(m_);
+    // max_i |F_i - c_i| at the free coordinates `at`; the Jacobian columns into jf.
+    const auto residual = [&](const std::vector<S>& at) {
+      for (int j = 0; j < m_; ++j) x[free_[j]] = at[j];
+      system_.evaluate(x, f_, jacobian_);
+      S r = 0;
+      for (int i = 0; i < m_; ++i) {
+        rhs(i) = f_[i] - level_[i];
+        r = std::max<S>(r, abs(rhs(i)));
+      }
+      return r;
+    };
+    S r = residual(y);
+    for (int iteration = 0; iteration < 60; ++iteration) {
+      if (r == 0) return true;
+      for (int i = 0; i < m_; ++i) {
+        for (int j = 0; j < m_; ++j) jf(i, j) = jacobian_[std::size_t(i) * n_ + free_[j]];
+      }
+      Eigen::FullPivLU<Matrix<S>> lu(jf);
+      if (lu.rank() < m_) return false;
+      const Vector<S> step = lu.solve(rhs);
+      S size = 0, scale = 1;
+      for (int j = 0; j < m_; ++j) {
+        size = std::max<S>(size, abs(step(j)));
+        scale = std::max<S>(scale, abs(y[j]));
+      }
+      if (size <= 64 * eps * scale) return true;
+      // Where the face Jacobian is nearly singular the steps stall above 64 eps: stop when the
+      // residual is at rounding level.
+      if (size <= 1e-3 * width && residualWithinRounding(y)) return true;
+      // Damping: halve the step until it stays near the face and lowers the residual.
+      S lambda = 1;
+      bool accepted = false;
+      for (int halving = 0; halving < 30 && !accepted; ++halving, lambda /= 2) {
+        bool near = true;
+        for (int j = 0; j < m_; ++j) {
+          trial[j] = y[j] - lambda * step(j);
+          near = near && trial[j] >= box.lo[j] - 2 * width && trial[j] <= box.hi[j] + 2 * width;
+        }
+        if (!near) continue;
+        const S rt = residual(trial);
+        // Near the root the residual is at rounding level: accept the full step there.
+        if (rt < r || (halving == 0 && size <= 1e-6 * width)) {
+          y = trial;
+          r = rt;
+          accepted = true;
+        }
+      }
+      // No step lowers the residual: converged iff it is at rounding level (the interval value
+      // of F - c at y contains 0), as happens where the face Jacobian is nearly singular.
+      if (!accepted) return residualWithinRounding(y);
+      if (lambda * 2 * size <= 64 * eps * scale) return true;
+    }
+    return false;
+  }
+
+  /// Whether F - c on the free coordinates y, widened by rounding, encloses 0 in outward-rounded
+  /// interval arithmetic.
+  bool residualWithinRounding(const std::vector<S>& y) const {
+    using I = Interval<S>;
+    std::vector<I> xi;
+    xi.reserve(n_);
+    for (int j = 0; j < n_; ++j) xi.emplace_back(point_[j]);
+    // The free coordinates widened by two units in the last place: the root itself need not
+    // be representable (F - c is then never exactly 0 at a floating-point y).
+    const S ulp = 2 * ScalarTraits<S>::epsilon();
+    for (int j = 0; j < m_; ++j) {
+      using std::abs;
+      xi[free_[j]] = I(y[j] - ulp * abs(y[j]), y[j] + ulp * abs(y[j]));
+    }
+    for (int i = 0; i < m_; ++i) {
+      const I f =
+          system_.equations()[i].template evaluate<S>(std::span<const I>(xi)) - I(level_[i]);
+      // Twice the enclosure's width: the evaluation order of F differs from the tape's.
+      const S slack = f.upper() - f.lower();
+      if (f.lower() - slack > 0 || f.upper() + slack < 0) return false;
+    }
+    return true;
+  }
+
+  /// Krawczyk operator on the face box X with y = mid X, Y = J(y)^-1:
+  /// K = y - Y F(y) + (I - Y J(X)) (X - y). K inside int X proves one root in X;
+  /// K disjoint from X proves none. J(X) comes from the Bernstein derivative hulls.
+  Krawczyk krawczyk(const std::vector<Bernstein<S>>& patches) {
+    // J(X) from the hulls of the derivative patches, widened by the rounding margin.
+    const Box<S>& box = patches.front().domain();
+    jx_.resize(std::size_t(m_) * m_);
+    for (int i = 0; i < m_; ++i) {
+      for (int j = 0; j < m_; ++j)
+        jx_[std::size_t(i) * m_ + j] = derivativeHull(patches[i], j, margins_[i]);
+    }
+    return krawczyk(box);
+  }
+
+  /// J(X) on a box (free coordinates) into jx_, by interval evaluation of the gradients
+  /// (outward rounded; for boxes that are not a face patch's).
+  void intervalJacobian(const Box<S>& box) {
+    using I = Interval<S>;
+    std::vector<I> x;
+    x.reserve(n_);
+    for (int j = 0; j < n_; ++j) x.emplace_back(point_[j]);
+    for (int j = 0; j < m_; ++j) x[free_[j]] = I(box.lo[j], box.hi[j]);
+    std::vector<I> gradient(n_);
+    jx_.resize(std::size_t(m_) * m_);
+    for (int i = 0; i < m_; ++i) {
+      system_.equations()[i].template evaluate<S>(std::span<const I>(x), std::span<I>(gradient));
+      for (int j = 0; j < m_; ++j) jx_[std::size_t(i) * m_ + j] = gradient[free_[j]];
     }
   }
-  for (std::int32_t p : mesh) addSimplices(polygons_[p], p, firstVertex, piece, out);
+
+  /// Whether F_i - c_i, evaluated in interval arithmetic over the face box, excludes 0.
+  bool intervalExcludes(const Box<S>& box, int i) const {
+    using I = Interval<S>;
+    std::vector<I> x;
+    x.reserve(n_);
+    for (int j = 0; j < n_; ++j) x.emplace_back(point_[j]);
+    for (int j = 0; j < m_; ++j) x[free_[j]] = I(box.lo[j], box.hi[j]);
+    const I f = system_.equations()[i].template evaluate<S>(std::span<const I>(x)) - I(level_[i]);
+    return !f.containsZero();
+  }
+
+  /// Krawczyk on the box `root +- width` around a Newton root, with J(X) from the interval
+  /// gradient; it contains the whole current face when `width` is the face's width, so
+  /// kUnique proves the root is the face's only one even when it lies near the face boundary.
+  Krawczyk krawczykAround(const std::vector<S>& root, const Box<S>& face) {
+    Box<S> box{root, root};
+    for (int j = 0; j < m_; ++j) {
+      const S w = face.hi[j] - face.lo[j];
+      box.lo[j] -= w;
+      box.hi[j] += w;
+    }
+    intervalJacobian(box);
+    return krawczyk(box);
+  }
+
+  /// Krawczyk operator on the box X with y = mid X, Y = J(y)^-1 and J(X) enclosed by jx_:
+  /// K = y - Y F(y) + (I - Y J(X)) (X - y). K inside int X proves one root in X;
+  /// K disjoint from X proves none.
+  Krawczyk krawczyk(const Box<S>& box) {
+    using I = Interval<S>;
+    std::vector<S> y(m_);
+    for (int j = 0; j < m_; ++j) y[j] = (box.lo[j] + box.hi[j]) / 2;
+    std::vector<S> x = point_;
+    for (int j = 0; j < m_; ++j) x[free_[j]] = y[j];
+    system_.evaluate(x, f_, jacobian_);
+    Matrix<S> jy(m_, m_);
+    for (int i = 0; i < m_; ++i) {
+      for (int j = 0; j < m_; ++j) jy(i, j) = jacobian_[std::size_t(i) * n_ + free_[j]];
+    }
+    Eigen::FullPivLU<Matrix<S>> lu(jy);
+    if (lu.rank() < m_) return Krawczyk::kUnknown;
+    const Matrix<S> inverse = lu.inverse();
+    // F(y) by interval evaluation at the point, so its rounding is enclosed.
+    std::vector<I> xi;
+    xi.reserve(n_);
+    for (int j = 0; j < n_; ++j) xi.emplace_back(x[j]);
+    std::vector<I> fy;
+    for (int i = 0; i < m_; ++i) {
+      fy.push_back(system_.equations()[i].template evaluate<S>(std::span<const I>(xi)) -
+                   I(level_[i]));
+    }
+    bool unique = true;
+    for (int i = 0; i < m_; ++i) {
+      I k(y[i]);
+      for (int l = 0; l < m_; ++l) k -= I(inverse(i, l)) * fy[l];
+      for (int j = 0; j < m_; ++j) {
+        I c(S(i == j ? 1 : 0));
+        for (int l = 0; l < m_; ++l) c -= I(inverse(i, l)) * jx_[std::size_t(l) * m_ + j];
+        k += c * I(box.lo[j] - y[j], box.hi[j] - y[j]);
+      }
+      if (k.upper() < box.lo[i] || k.lower() > box.hi[i]) return Krawczyk::kNone;
+      if (!(k.lower() > box.lo[i] && k.upper() < box.hi[i])) unique = false;
+    }
+    return unique ? Krawczyk::kUnique : Krawczyk::kUnknown;
+  }
+
+  const System<S>& system_;
+  int n_, m_, maxDepth_;
+  std::vector<S> level_;  ///< c: the crossings are those of F = c
+  S slack_;               ///< how far outside the domain a crossing is still kept
+  std::vector<S> point_;
+  std::vector<int> free_;
+  std::vector<S> f_, jacobian_;
+  std::vector<Interval<S>> jx_;
+  std::span<const S> margins_;
+  bool certain_ = true;
+  bool proven_ = true;
+  bool withinRounding_ = false;
+  /// Boxes of the current face subdivided so far, and the most one face may take: an isolated
+  /// root needs about 2 maxDepth m boxes, a fold a few times that.
+  long boxes_ = 0;
+  static constexpr long kMaxBoxes = 4096;
+};
+
+/// The m x n Jacobian of the system at x.
+template <class S>
+Matrix<S> jacobianAt(const System<S>& system, std::span<const S> x) {
+  const int m = system.m(), n = system.n();
+  std::vector<S> f(m), j(std::size_t(m) * n);
+  system.evaluate(x, f, j);
+  Matrix<S> out(m, n);
+  for (int r = 0; r < m; ++r) {
+    for (int c = 0; c < n; ++c) out(r, c) = j[std::size_t(r) * n + c];
+  }
+  return out;
 }
 
+/// Singular values of the Jacobian at x, largest first.
 template <class S>
-template <class SlotOf>
-std::int32_t AdaptiveCrossing<S>::pieces(std::size_t c, const std::vector<std::int32_t>& ps,
-                                         std::vector<std::int32_t>& piece, const SlotOf& slotOf,
-                                         ConnectionOutput<S>& out) const {
-  if (ps.empty()) return 0;
-  const bool boundary = onDomainBoundary(static_cast<std::int32_t>(c));
-  if (k_ == 1) {
-    for (std::int32_t p : ps) piece[p * 4 + slotOf(p, c)] = 0;
-    if (ps.size() != 2 && !(boundary && ps.size() == 1)) ++out.ambiguousCells;
-    return 1;
-  }
-  std::vector<std::int64_t> nodes;
-  const std::vector<std::array<int, 2>> edges =
-      linkEdges(static_cast<std::int64_t>(c), polygons_, ps, nodes);
-  UnionFind uf{std::vector<int>(nodes.size())};
-  std::iota(uf.parent.begin(), uf.parent.end(), 0);
-  for (const auto& e : edges) uf.unite(e[0], e[1]);
-  std::vector<int> componentOf(nodes.size(), -1), degree(nodes.size(), 0);
-  int components = 0;
-  for (std::size_t i = 0; i < nodes.size(); ++i) {
-    const int r = uf.find(static_cast<int>(i));
-    if (componentOf[r] < 0) componentOf[r] = components++;
-  }
-  for (const auto& e : edges) ++degree[e[0]], ++degree[e[1]];
-  for (std::size_t q = 0; q < ps.size(); ++q)
-    piece[ps[q] * 4 + slotOf(ps[q], c)] = componentOf[uf.find(edges[q][0])];
-  // One simple piece: one component that is a cycle (or a path on the domain boundary).
-  int ends = 0;
-  bool simple = components == 1;
-  for (int d : degree) {
-    if (d == 1) ++ends;
-    simple = simple && d <= 2;
-  }
-  simple = simple && (ends == 0 || (boundary && ends == 2));
-  if (!simple) ++out.ambiguousCells;
-  return components;
+Vector<S> singularValuesAt(const System<S>& system, std::span<const S> x) {
+  return Eigen::JacobiSVD<Matrix<S>>(jacobianAt(system, x)).singularValues();
 }
 
+/// The local degree of F on a face from its roots: the sum of the signs of the face Jacobian's
+/// determinant (columns of the free axes). A piece of M that dips through the face and back
+/// gives two roots of opposite sign that cancel; two strands crossing the face the same way (a
+/// self-intersection) add up and keep the curve connected. The count is odd exactly when the
+/// number of roots is odd, so closedness mod 2 is kept. Near a singular point, where the
+/// orientation of M is undefined and two strands may cross one face with opposite signs, every
+/// root counts, rather than cut M.
 template <class S>
-bool AdaptiveCrossing<S>::onDomainBoundary(std::int32_t c) const {
-  const auto touches = [&](std::int32_t leaf) {
+int faceDegree(const System<S>& system, const std::vector<std::vector<S>>& roots,
+               const std::vector<int>& freeAxes) {
+  const int m = system.m();
+  int degree = 0;
+  bool singular = false;
+  for (const auto& r : roots) {
+    const Matrix<S> full = jacobianAt<S>(system, r);
+    Matrix<S> j(m, m);
+    for (int col = 0; col < m; ++col) j.col(col) = full.col(freeAxes[col]);
+    const S det = Eigen::FullPivLU<Matrix<S>>(j).determinant();
+    degree += det > 0 ? 1 : (det < 0 ? -1 : 0);
+    const Vector<S> sigma = Eigen::JacobiSVD<Matrix<S>>(full).singularValues();
+    singular = singular || sigma(m - 1) < sigma(0) / 10;
+  }
+  const int count = static_cast<int>(roots.size());
+  if (count % 2 == 1 && degree == 0) degree = 1;  // a root of unknown orientation
+  if (count >= 2 && std::abs(degree) < count && singular) degree = count;
+  return degree;
+}
+
+/// The level c of the perturbed system F = c whose crossings with the grid faces decide the
+/// dual cells (docs/crossing.md, "General position"). M itself may pass through vertices,
+/// edges and faces of the grid; by Sard's theorem almost every nearby level set meets every
+/// face of the grid transversally and misses its lower-dimensional faces. c_i is a fixed
+/// irrational fraction of `kRelative` times the cell width times the gradient scale of F_i,
+/// so F = c lies about 1e-8 cell widths from M: far above rounding, far below any feature
+/// the grid resolves. The grid, the domain and the B-spline knot planes stay where they are.
+template <class S>
+struct GeneralPosition {
+  static constexpr int kAttempts = 4;
+  static constexpr double kRelative = 1.0 / (1 << 26);
+
+  GeneralPosition(const ConnectionInput<S>& in, const Grid& grid) {
+    using std::abs;
+    using std::sqrt;
+    const int n = grid.n, m = in.system.m();
+    S width = S(grid.cellWidth(0));
+    for (int j = 1; j < n; ++j) width = std::min<S>(width, S(grid.cellWidth(j)));
+    // Gradient scale of each F_i: the median gradient norm at (a sample of) the projected cell
+    // points that Newton brought onto M. Points where it failed can lie far off M, with
+    // gradients orders of magnitude larger (interval bounding keeps many such cells).
+    const std::size_t count = in.cells.size();
+    std::vector<std::size_t> onM;
+    for (std::size_t c = 0; c < count; ++c) {
+      if (in.projections.converged[c]) onM.push_back(c);
+    }
+    if (onM.empty()) {
+      for (std::size_t c = 0; c < count; ++c) onM.push_back(c);
+    }
+    const std::size_t stride = std::max<std::size_t>(1, onM.size() / 256);
+    std::vector<std::vector<S>> norms(m);
+    std::vector<S> f(m), jacobian(std::size_t(m) * n);
+    for (std::size_t t = 0; t < onM.size(); t += stride) {
+      in.system.evaluate(in.projections.at(onM[t]), f, jacobian);
+      for (int i = 0; i < m; ++i) {
+        S norm = 0;
+        for (int j = 0; j < n; ++j)
+          norm += jacobian[std::size_t(i) * n + j] * jacobian[std::size_t(i) * n + j];
+        norms[i].push_back(sqrt(norm));
+      }
+    }
+    scale.assign(m, S(0));
+    for (int i = 0; i < m; ++i) {
+      auto middle = norms[i].begin() + norms[i].size() / 2;
+      std::nth_element(norms[i].begin(), middle, norms[i].end());
+      if (middle != norms[i].end()) scale[i] = *middle;
+    }
+    for (S& g : scale) {
+      if (!(g > 0)) g = 1;
+      g *= width * S(kRelative);
+    }
+    slack = 64 * width * S(kRelative);
+    tolerance = width * S(kRelative) / 64;
+  }
+
+  /// The level of attempt a: c_i = theta_{a,i} * scale_i with theta in [0.5, 1) from the
+  /// golden-ratio sequence (no two attempts or equations share a ratio).
+  std::vector<S> level(int attempt) const {
+    std::vector<S> c(scale.size());
+    for (std::size_t i = 0; i < scale.size(); ++i) {
+      const double t = std::fmod(0.6180339887498949 * double(attempt * 7 + i + 1), 1.0);
+      c[i] = S(0.5 + 0.5 * t) * scale[i];
+    }
+    return c;
+  }
+
+  /// How many of a face's roots lie within the tolerance of one of its grid (not domain)
+  /// boundaries: there the face and its neighbour could disagree about the root.
+  std::int64_t nearBoundary(const std::vector<std::vector<S>>& roots, const Box<S>& box,
+                            const std::vector<int>& freeAxes, const FaceEnds& ends) const {
+    using std::abs;
+    std::int64_t near = 0;
+    for (const auto& r : roots) {
+      for (std::size_t t = 0; t < freeAxes.size(); ++t) {
+        const int j = freeAxes[t];
+        if ((!ends.lower[t] && abs(r[j] - box.lo[j]) < tolerance) ||
+            (!ends.upper[t] && abs(box.hi[j] - r[j]) < tolerance)) {
+          ++near;
+          break;
+        }
+      }
+    }
+    return near;
+  }
+
+  std::vector<S> scale;  ///< kRelative * cell width * gradient scale, per equation
+  S slack;               ///< crossings kept this far outside the domain
+  S tolerance;           ///< a root this close to a face boundary is degenerate
+};
+
+/// Union-find over small integer sets (the link of one vertex).
+struct UnionFind {
+  std::vector<int> parent;
+  int find(int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  }
+  void unite(int a, int b) { parent[find(a)] = find(b); }
+};
+
+/// A crossed minimal m-face of the tree (docs/certificate.md): the leaves around it in cyclic
+/// order (k = 2; a coarser leaf that fills two of the four quadrants appears once, so the
+/// polygon is a triangle), or the two leaves across it (k = 1). A node is a leaf number, or
+/// -1 - tag for a region beyond the domain (such a polygon only enters the certificate).
+struct Polygon {
+  std::array<std::int64_t, 4> node{-1, -1, -1, -1};
+  int size = 0;
+  std::int32_t root = -1;  ///< its crossing, in the root list
+  bool outside = false;    ///< a node lies beyond the domain: not a cell of the mesh
+};
+
+/// Where a minimal m-face lies: its level, the index of its lower corner there and its k fixed
+/// axes.
+struct FaceRef {
+  int level = 0;
+  std::vector<std::int32_t> corner;
+  std::array<int, 2> axes{};
+};
+
+/// What the face solver found on one minimal m-face (cached: a face is solved once per level c).
+template <class S>
+struct FaceResult {
+  std::vector<S> root;          ///< the first root (n coordinates), if any
+  int roots = 0;                ///< how many roots
+  int degree = 0;               ///< faceDegree
+  bool certain = true;          ///< every root decided (else its cells are singular cells)
+  bool proven = true;           ///< every decision a proof (FaceSolver::proven)
+  bool withinRounding = false;  ///< FaceSolver::withinRounding
+  std::int64_t degenerate = 0;  ///< roots within rounding of the face's boundary
+};
+
+/// Why a leaf is not certified (docs/certificate.md); the names go to uncertified.csv.
+enum class Failure : std::uint8_t { kNone, kCrossing, kGraph, kFaceGraph, kLink };
+
+const char* failureName(Failure f) {
+  switch (f) {
+    case Failure::kCrossing:
+      return "crossing";
+    case Failure::kGraph:
+      return "graph";
+    case Failure::kFaceGraph:
+      return "face-graph";
+    case Failure::kLink:
+      return "link";
+    case Failure::kNone:
+      break;
+  }
+  return "";
+}
+
+/// The crossing connection on an adaptive 2^n-tree: crossings on the minimal m-faces, the
+/// certificate of every leaf, refinement of the leaves that fail it, and the dual complex.
+template <class S>
+class AdaptiveCrossing {
+ public:
+  AdaptiveCrossing(const ConnectionInput<S>& in, int maxFaceDepth)
+      : in_(in),
+        grid_(in.cells.grid),
+        n_(grid_.n),
+        k_(in.k),
+        m_(n_ - k_),
+        maxFaceDepth_(maxFaceDepth),
+        position_(in, grid_),
+        graphTest_(grid_.n, grid_.n - in.k),
+        tree_(grid_, std::max(grid_.depth, in.refine ? in.maxLevel : grid_.depth)) {
+    domain_ = toScalar<S>(grid_.domain);
+    for (int a = 0; a < n_; ++a) {
+      if (k_ == 1) fixedAxes_.push_back({a, -1});
+      for (int b = a + 1; k_ == 2 && b < n_; ++b) fixedAxes_.push_back({a, b});
+    }
+    // Refinement stops before this many leaves: thin features need a few times the base
+    // cells (genus2 at depth 5: 8x, the thin torus at depth 3: 50x, so at least 65536 in
+    // R^3); where refinement cannot succeed (tangency along a curve, graph tests that fail on
+    // every cell) it bounds the cost. A leaf costs more and a refinement makes 2^n of them as
+    // n grows, so the floor shrinks by 16 per dimension, to 4096 from R^4 on.
+    maxLeaves_ = std::max<std::size_t>(16 * in.cells.size(),
+                                       std::size_t{1} << std::max(12, 16 - 4 * (grid_.n - 3)));
+    // A chord error the user asks for (--tolerance) may need many more: up to 2^22 leaves
+    // (a few hundred MB); the CLI warns when the tolerance is not reached.
+    if (in.tolerance > 0) maxLeaves_ = std::max<std::size_t>(maxLeaves_, std::size_t{1} << 22);
+  }
+
+  /// The certified mesh, refining where the certificate fails. When refinement does not reach a
+  /// certificate and its mesh has more non-manifold defects than the base grid's (crossings at
+  /// the scale of the level offset c, docs/certificate.md "Status"), the base grid's is kept.
+  ConnectionOutput<S> run() {
+    ConnectionOutput<S> out = attempts();
+    if (out.topology.certified || refined_ == 0) return out;
+    const std::int64_t refinedDefects = nonmanifold(out.complex);
+    const int reached = out.topology.maxLevel;
+    refining_ = false;
+    ConnectionOutput<S> base = attempts();
+    const std::int64_t baseDefects = nonmanifold(base.complex);
+    if (baseDefects >= refinedDefects) return out;
+    base.topology.reason +=
+        "; refinement down to level " + std::to_string(reached) + " did not certify and left " +
+        std::to_string(refinedDefects) +
+        " non-manifold edges or branch vertices, so the base grid's mesh is kept";
+    return base;
+  }
+
+  /// Edges of more than two triangles (k = 2) or vertices of more than two edges (k = 1).
+  static std::int64_t nonmanifold(const Complex<S>& complex) {
+    std::unordered_map<std::uint64_t, int> uses;
+    const std::size_t count = complex.simplexCount();
+    const int k = complex.k;
+    for (std::size_t t = 0; t < count; ++t) {
+      const std::int32_t* v = complex.simplices.data() + t * (k + 1);
+      if (k == 1) {
+        ++uses[std::uint64_t(v[0])], ++uses[std::uint64_t(v[1])];
+        continue;
+      }
+      for (int i = 0; i < 3; ++i) {
+        const auto a = std::uint64_t(std::min(v[i], v[(i + 1) % 3]));
+        const auto b = std::uint64_t(std::max(v[i], v[(i + 1) % 3]));
+        ++uses[a << 32 | b];
+      }
+    }
+    return std::count_if(uses.begin(), uses.end(), [](const auto& u) { return u.second > 2; });
+  }
+
+  /// Level offsets until no crossing is within rounding of a face boundary, each with its
+  /// refinement and certificate; the complex of the last.
+  ConnectionOutput<S> attempts() {
+    ConnectionOutput<S> out;
+    out.complex.n = n_;
+    out.complex.k = k_;
+    // General position: try levels until no crossing is within rounding of a face boundary.
+    std::int64_t degenerate = 0;
+    for (int attempt = 0;; ++attempt) {
+      // For m = 1 the sign rule decides (the level set F = -delta, delta -> 0+): level 0.
+      level_ = m_ == 1 ? std::vector<S>(1, S(0)) : position_.level(attempt);
+      degenerate = refineAndCertify();
+      out.perturbation.attempts = attempt + 1;
+      out.perturbation.degenerateCrossings = degenerate;
+      out.perturbation.level.clear();
+      if (m_ > 1) {
+        for (const S& c : level_) out.perturbation.level.push_back(toDouble(c));
+      }
+      if (degenerate == 0 || m_ == 1 || attempt + 1 == GeneralPosition<S>::kAttempts) break;
+    }
+    record(out.topology, degenerate);
+    buildComplex(out);
+    return out;
+  }
+
+ private:
+  using Occ = Occupant::Kind;
+
+  /// The root forms a leaf's patches are restricted from (the domain's, or the B-spline
+  /// patch's), with the rounding margin of each equation.
+  struct RootForms {
+    std::vector<Bernstein<S>> forms;
+    std::vector<S> margins;
+  };
+
+  const RootForms& rootForms(std::span<const std::int32_t> index, int level) {
+    const Problem& problem = in_.problem;
+    const int patchLevel = problem.roots.empty() ? 0 : problem.rootLevel;
+    CellKey key = 0;
+    std::vector<std::int32_t> patch(n_);
+    for (int j = 0; j < n_; ++j) {
+      patch[j] = index[j] >> (level - patchLevel);
+      key = key * (CellKey{1} << patchLevel) + static_cast<CellKey>(patch[j]);
+    }
+    auto it = rootForms_.find(key);
+    if (it != rootForms_.end()) return it->second;
+    Box<S> box = domain_;
+    if (!problem.roots.empty()) {
+      Grid patchGrid = grid_;
+      patchGrid.depth = patchLevel;
+      box = cellBox(patchGrid, domain_, patch);
+    }
+    RootForms rf;
+    const S unit = ScalarTraits<S>::epsilon();
+    for (std::size_t i = 0; i < in_.system.equations().size(); ++i) {
+      rf.forms.push_back(in_.system.equations()[i].template toBernstein<S>(box));
+      const auto [lo, hi] = rf.forms.back().coefficientRange();
+      using std::abs;
+      const double relative = i < in_.coefficientError.size() ? in_.coefficientError[i] : 0.0;
+      rf.margins.push_back((S(relative) + 1024 * unit) * std::max<S>(abs(lo), abs(hi)));
+    }
+    return rootForms_.emplace(key, std::move(rf)).first->second;
+  }
+
+  Box<S> leafBox(std::int32_t leaf) const {
+    return cellBox(tree_.grid(tree_.level(leaf)), domain_, tree_.index(leaf));
+  }
+
+  /// The leaf's Bernstein patches (into patches_) and whether they prove that M_c does not
+  /// meet the closed leaf (then no face of it is crossed); bandEmpty_ records whether no level
+  /// set F = t c, t in [0, 1], meets it either (M itself, and the isotopy from M to M_c).
+  bool restrictTo(std::int32_t leaf) {
+    const RootForms& rf = rootForms(tree_.index(leaf), tree_.level(leaf));
+    const Box<S> box = leafBox(leaf);
+    patches_.resize(m_);
+    margins_ = rf.margins;
+    bool empty = false, band = false;
+    for (int i = 0; i < m_; ++i) {
+      patches_[i] = rf.forms[i].restrict(box);
+      const S c = level_[i];
+      empty = empty || clearsRange(patches_[i], c, c, rf.margins[i]);
+      band = band ||
+             clearsRange(patches_[i], std::min<S>(S(0), c), std::max<S>(S(0), c), rf.margins[i]);
+    }
+    bandEmpty_.resize(tree_.size(), 0);
+    bandEmpty_[leaf] = band;
+    return empty;
+  }
+
+  /// Solves face (axes, side) of `leaf` (patches_ hold the leaf's patches).
+  FaceResult<S> solveFace(std::int32_t leaf, const std::array<int, 2>& axes, int side) {
+    const Box<S> box = leafBox(leaf);
     const auto ci = tree_.index(leaf);
     const std::int64_t top = tree_.grid(tree_.level(leaf)).cellsPerAxis();
-    return std::any_of(ci.begin(), ci.end(),
-                       [&](std::int32_t i) { return i == 0 || i + 1 == top; });
-  };
-  if (c < static_cast<std::int32_t>(block_.size()) && block_[c] >= 0) {
-    const auto& members = blocks_[block_[c]];
-    return std::any_of(members.begin(), members.end(), touches);
-  }
-  return touches(c);
-}
-
-template <class S>
-void AdaptiveCrossing<S>::addSimplices(const Polygon& poly, std::int32_t p,
-                                       const std::vector<std::int32_t>& first,
-                                       const std::vector<std::int32_t>& piece,
-                                       ConnectionOutput<S>& out) const {
-  std::array<std::int32_t, 4> v{};
-  for (int i = 0; i < poly.size; ++i) v[i] = first[poly.node[i]] + piece[p * 4 + i];
-  if (k_ == 1) {
-    out.complex.addSimplex(std::array<std::int32_t, 2>{v[0], v[1]});
-    return;
-  }
-  if (poly.size == 3) {
-    out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[1], v[2]});
-    return;
-  }
-  const auto distance = [&](int a, int b) {
-    S sum = 0;
+    FaceEnds ends;
+    std::vector<int> freeAxes;
+    std::vector<S> point(box.lo);
     for (int j = 0; j < n_; ++j) {
-      const S diff = out.complex.vertices[std::size_t(v[a]) * n_ + j] -
-                     out.complex.vertices[std::size_t(v[b]) * n_ + j];
-      sum += diff * diff;
+      if (j == axes[0] || j == axes[1]) continue;
+      freeAxes.push_back(j);
+      ends.lower.push_back(ci[j] == 0);
+      ends.upper.push_back(ci[j] + 1 == top);
     }
-    return sum;
-  };
-  if (distance(0, 2) <= distance(1, 3)) {
-    out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[1], v[2]});
-    out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[2], v[3]});
-  } else {
-    out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[1], v[3]});
-    out.complex.addSimplex(std::array<std::int32_t, 3>{v[1], v[2], v[3]});
+    // Slice the highest fixed axis first so the lower axis numbers stay valid.
+    std::vector<Bernstein<S>> face(m_);
+    for (int i = 0; i < m_; ++i) {
+      face[i] = patches_[i];
+      for (int t = k_ - 1; t >= 0; --t) {
+        const bool upper = (side >> t) & 1;
+        face[i] = face[i].faceSlice(axes[t], upper);
+        point[axes[t]] = upper ? box.hi[axes[t]] : box.lo[axes[t]];
+      }
+    }
+    std::vector<std::vector<S>> roots;
+    FaceSolver<S> solver(in_.system, maxFaceDepth_, level_, position_.slack);
+    FaceResult<S> r;
+    r.certain = solver.solve(point, freeAxes, face, ends, roots, margins_);
+    r.proven = solver.proven();
+    r.withinRounding = solver.withinRounding();
+    if (m_ > 1) r.degenerate = position_.nearBoundary(roots, box, freeAxes, ends);
+    r.roots = static_cast<int>(roots.size());
+    if (!roots.empty()) {
+      r.degree = faceDegree(in_.system, roots, freeAxes);
+      r.root = roots.front();
+    }
+    return r;
   }
-}
 
-// The members of AdaptiveCrossing defined in this file, for double and ndc::Mpfr.
-#define NDC_CROSSING_INSTANTIATE(S)                                                               \
-  template AdaptiveCrossing<S>::AdaptiveCrossing(const ConnectionInput<S>& in, int maxFaceDepth); \
-  template void AdaptiveCrossing<S>::grow();                                                      \
-  template void AdaptiveCrossing<S>::buildComplex(ConnectionOutput<S>& out);                      \
-  template bool AdaptiveCrossing<S>::onDomainBoundary(std::int32_t c) const;                      \
-  template void AdaptiveCrossing<S>::addSimplices(                                                \
-      const Polygon& poly, std::int32_t p, const std::vector<std::int32_t>& first,                \
-      const std::vector<std::int32_t>& piece, ConnectionOutput<S>& out) const;
-NDC_CROSSING_INSTANTIATE(double)
-NDC_CROSSING_INSTANTIATE(Mpfr)
-#undef NDC_CROSSING_INSTANTIATE
+  /// One pass over the minimal m-faces of the active leaves: the polygons of the crossed ones
+  /// (excluded base cells around a crossed face become touch leaves, walked in turn) and the
+  /// leaves next to a face whose crossings are not proven. Returns the degenerate crossings.
+  std::int64_t crossFaces() {
+    polygons_.clear();
+    rootPoints_.clear();
+    unprovenFaces_.clear();
+    unprovenOf_.clear();
+    unprovenOfEmpty_.clear();
+    std::int64_t degenerate = 0;
+    std::vector<std::int32_t> corner(n_), position(n_);
+    std::array<Occupant, 4> around;
+    const int quadrants = 1 << k_;
+    const auto faceTypes = static_cast<std::uint64_t>(fixedAxes_.size()) << k_;
+    for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
+      if (!tree_.active(c)) continue;
+      grow();
+      bool restricted = false;
+      if (empty_[c] < 0) {
+        empty_[c] = restrictTo(c) ? 1 : 0;
+        restricted = true;
+      }
+      if (empty_[c] == 1) continue;  // no level set between M and M_c meets it
+      const int level = tree_.level(c);
+      // A copy: touch leaves added below may move the tree's index storage.
+      const std::vector<std::int32_t> ci(tree_.index(c).begin(), tree_.index(c).end());
+      for (std::size_t a = 0; a < fixedAxes_.size(); ++a) {
+        const auto& axes = fixedAxes_[a];
+        for (int side = 0; side < quadrants; ++side) {
+          std::copy(ci.begin(), ci.end(), corner.begin());
+          for (int t = 0; t < k_; ++t) corner[axes[t]] += (side >> t) & 1;
+          // The regions around the face in cyclic order (k = 2): (-a,-b), (+a,-b), (+a,+b),
+          // (-a,+b). A finer region means the face is not minimal: its parts belong to the
+          // finer leaves. The face belongs to the first leaf of its own level.
+          bool minimal = true, owner = true;
+          for (int q = 0; q < quadrants && minimal; ++q) {
+            const int bits = k_ == 1 ? q : (q == 0 ? 0 : q == 1 ? 1 : q == 2 ? 3 : 2);
+            std::copy(corner.begin(), corner.end(), position.begin());
+            for (int t = 0; t < k_; ++t) position[axes[t]] += ((bits >> t) & 1) - 1;
+            around[q] = tree_.find(level, position);
+            minimal = around[q].kind != Occ::kFiner;
+            if (around[q].kind == Occ::kLeaf && tree_.level(around[q].leaf) == level &&
+                around[q].leaf < c)
+              owner = false;
+          }
+          if (!minimal || !owner) continue;
+          const std::uint64_t key =
+              static_cast<std::uint64_t>(c) * faceTypes + (a << k_) + std::uint64_t(side);
+          auto it = faces_.find(key);
+          if (it == faces_.end()) {
+            if (!restricted) {
+              restrictTo(c);
+              restricted = true;
+            }
+            it = faces_.emplace(key, solveFace(c, axes, side)).first;
+          }
+          degenerate += addFace(it->second, around, FaceRef{level, corner, axes});
+        }
+      }
+    }
+    return degenerate;
+  }
 
-}  // namespace crossing_detail
+  /// Records a solved face: flags its leaves when the face is not proven, and adds its
+  /// polygon (|degree| copies) when it is crossed. Returns its degenerate crossings.
+  std::int64_t addFace(const FaceResult<S>& r, std::array<Occupant, 4>& around,
+                       const FaceRef& face) {
+    const int quadrants = 1 << k_;
+    std::vector<S> centre(n_);
+    const Grid& g = tree_.grid(face.level);
+    for (int j = 0; j < n_; ++j) {
+      const bool fixed = j == face.axes[0] || (k_ == 2 && j == face.axes[1]);
+      centre[j] = domain_.lo[j] + S((face.corner[j] + (fixed ? 0.0 : 0.5)) * g.cellWidth(j));
+    }
+    const bool unproven = !r.proven || r.roots > 1 || std::abs(r.degree) > 1 || r.degenerate;
+    const bool singular = !r.certain || std::abs(r.degree) > 1;
+    // Roots the face solver could not isolate at its finest face level, or within rounding
+    // of the face's boundary: a finer cell has the same trouble (a tangency, or a feature at
+    // the scale of the level offset c), so such leaves are not refined.
+    const bool stuck = !r.certain || r.withinRounding || r.degenerate;
+    for (int q = 0; q < quadrants; ++q) {
+      if (around[q].kind != Occ::kLeaf) continue;
+      if (stuck) stuck_[around[q].leaf] = 1;
+      if (unproven) unproven_[around[q].leaf] = 1;
+      if (singular) singular_[around[q].leaf] = 1;
+      if (unproven)
+        setTrouble(around[q].leaf,
+                   r.roots > 0 ? std::span<const S>(r.root) : std::span<const S>(centre));
+    }
+    if (r.degree == 0) {
+      if (unproven) recordUnproven(around, face);
+      return r.degenerate;
+    }
+    Polygon p;
+    for (int q = 0; q < quadrants; ++q) {
+      std::int64_t node = 0;
+      if (around[q].kind == Occ::kEmpty) {
+        // A cell the level set F = c enters where M only touches it: a touch leaf.
+        std::vector<std::int32_t> index(n_);
+        grid_.unpack(around[q].key, index);
+        around[q].kind = Occ::kLeaf;
+        around[q].leaf = tree_.addLeaf(grid_.depth, index, false);
+        grow();
+        if (unproven) unproven_[around[q].leaf] = 1;
+        if (singular) singular_[around[q].leaf] = 1;
+      }
+      if (around[q].kind == Occ::kLeaf) {
+        node = around[q].leaf;
+      } else {
+        node = -1 - static_cast<std::int64_t>(around[q].key);
+        p.outside = true;
+      }
+      if (p.size > 0 && p.node[p.size - 1] == node) continue;
+      p.node[p.size++] = node;
+    }
+    if (p.size > 1 && p.node[p.size - 1] == p.node[0]) --p.size;
+    if (unproven) recordUnproven(around, face);
+    p.root = static_cast<std::int32_t>(rootPoints_.size() / n_);
+    rootPoints_.insert(rootPoints_.end(), r.root.begin(), r.root.end());
+    for (int copy = 0; copy < std::abs(r.degree); ++copy) polygons_.push_back(p);
+    return r.degenerate;
+  }
+
+  /// The leaves around an unproven face (-1 for other regions), for the blocks' test.
+  void recordUnproven(const std::array<Occupant, 4>& around, const FaceRef& face) {
+    const auto f = static_cast<std::int32_t>(unprovenFaces_.size());
+    for (int q = 0; q < (1 << k_); ++q) {
+      if (around[q].kind == Occ::kLeaf) {
+        unprovenOf_.resize(tree_.size());
+        unprovenOf_[around[q].leaf].push_back(f);
+      } else if (around[q].kind == Occ::kEmpty) {
+        unprovenOfEmpty_[around[q].key].push_back(f);
+      }
+    }
+    unprovenFaces_.push_back(face);
+  }
+
+  /// When the face lies inside exactly one face of the box of the block (level, lo), on one
+  /// of its boundary planes and strictly inside along every other axis: that plane's axis
+  /// (`upper`: the block's upper side). Otherwise -1.
+  int blockFaceAxis(const FaceRef& face, int level, const std::vector<std::int32_t>& lo,
+                    bool& upper) const {
+    const std::int64_t scale = std::int64_t{1} << (face.level - level);
+    int axis = -1;
+    for (int j = 0; j < n_; ++j) {
+      const std::int64_t a = lo[j] * scale, b = (lo[j] + 2) * scale, x = face.corner[j];
+      const bool fixed = j == face.axes[0] || (k_ == 2 && j == face.axes[1]);
+      if (fixed && (x == a || x == b)) {
+        if (axis >= 0) return -1;  // on an edge of the block's box
+        axis = j;
+        upper = x == b;
+        continue;
+      }
+      if (fixed ? (x <= a || x >= b) : (x < a || x + 1 > b)) return -1;
+    }
+    return axis;
+  }
+
+  bool onOneBlockFace(const FaceRef& face, int level, const std::vector<std::int32_t>& lo) const {
+    bool upper = false;
+    return blockFaceAxis(face, level, lo, upper) >= 0;
+  }
+
+  /// Whether the face lies inside the block of `level` with lower corner `lo` (not on its
+  /// boundary).
+  bool inside(const FaceRef& face, int level, const std::vector<std::int32_t>& lo) const {
+    const std::int64_t scale = std::int64_t{1} << (face.level - level);
+    for (int j = 0; j < n_; ++j) {
+      const std::int64_t a = lo[j] * scale, b = (lo[j] + 2) * scale, x = face.corner[j];
+      const bool fixed = j == face.axes[0] || (k_ == 2 && j == face.axes[1]);
+      if (fixed ? (x <= a || x >= b) : (x < a || x + 1 > b)) return false;
+    }
+    return true;
+  }
+
+  /// Records a point near which the certificate of `leaf` failed (the first one stays): where
+  /// a block around the leaf should have its centre.
+  void setTrouble(std::int32_t leaf, std::span<const S> point) {
+    grow();
+    if (hasTrouble_[leaf]) return;
+    hasTrouble_[leaf] = 1;
+    std::copy(point.begin(), point.end(), trouble_.begin() + std::ptrdiff_t(leaf) * n_);
+  }
+
+  /// setTrouble at the centre of face (a, upper) of a leaf.
+  void faceTrouble(std::int32_t leaf, int a, bool upper) {
+    const Box<S> box = leafBox(leaf);
+    std::vector<S> centre(n_);
+    for (int j = 0; j < n_; ++j) centre[j] = (box.lo[j] + box.hi[j]) / 2;
+    centre[a] = upper ? box.hi[a] : box.lo[a];
+    setTrouble(leaf, centre);
+  }
+
+  /// Per-leaf arrays follow the tree's growth.
+  void grow() {
+    const std::size_t size = tree_.size();
+    if (empty_.size() >= size) return;
+    trouble_.resize(size * n_, S(0));
+    hasTrouble_.resize(size, 0);
+    empty_.resize(size, -1);
+    bandEmpty_.resize(size, 0);
+    unproven_.resize(size, 0);
+    stuck_.resize(size, 0);
+    singular_.resize(size, 0);
+    graph_.resize(size, -1);
+    faceGraph_.resize(size, -1);
+    failure_.resize(size, Failure::kNone);
+  }
+
+  /// The graph test of a leaf's box (cached): M_c ∩ leaf is proven a graph over k of the
+  /// coordinates (J enclosed by the widened derivative hulls of the leaf's patches).
+  bool cellGraph(std::int32_t leaf) {
+    if (graph_[leaf] < 0) {
+      restrictTo(leaf);
+      graph_[leaf] = patchesGraph();
+    }
+    return graph_[leaf] == 1;
+  }
+
+  /// The graph test of the box of patches_.
+  bool patchesGraph() {
+    jacobian_.assign(std::size_t(m_) * n_, Interval<S>());
+    for (int i = 0; i < m_; ++i) {
+      for (int j = 0; j < n_; ++j)
+        jacobian_[std::size_t(i) * n_ + j] = derivativeHull(patches_[i], j, margins_[i]);
+    }
+    std::vector<int> axes(n_);
+    std::iota(axes.begin(), axes.end(), 0);
+    return graphTest_.graph(jacobian_, axes);
+  }
+
+  /// Whether interval evaluation proves that M_c (with `band`: no level set between M and M_c)
+  /// does not meet `box`; for m = 1, the sign rule's level set F = -delta: F >= 0 or F < 0 on
+  /// the box. Catches what coefficient hulls miss, such as y^2 on a box around y = 0.
+  bool intervalEmpty(const Box<S>& box, bool band) {
+    using I = Interval<S>;
+    std::vector<I> x;
+    for (int j = 0; j < n_; ++j) x.emplace_back(box.lo[j], box.hi[j]);
+    for (int i = 0; i < m_; ++i) {
+      const I f = in_.system.equations()[i].template evaluate<S>(std::span<const I>(x));
+      if (m_ == 1 && (f.lower() >= 0 || f.upper() < 0)) return true;
+      const S c = level_[i];
+      const S lo = band ? std::min<S>(S(0), c) : c, hi = band ? std::max<S>(S(0), c) : c;
+      if (m_ > 1 && (f.lower() > hi || f.upper() < lo)) return true;
+    }
+    return false;
+  }
+
+  /// k = 2: the graph test of every (n-1)-face of a leaf (cached): M_c ∩ face is empty or a
+  /// graph over one coordinate, so no closed curve of M_c lies inside a face.
+  bool facesGraph(std::int32_t leaf) {
+    if (faceGraph_[leaf] < 0) {
+      restrictTo(leaf);
+      const int failed = failingFace();
+      faceGraph_[leaf] = failed < 0;
+      if (failed >= 0) faceTrouble(leaf, failed / 2, failed % 2 == 1);
+    }
+    return faceGraph_[leaf] == 1;
+  }
+
+  /// The free axes of a face that fixes axis a.
+  std::vector<int> freeAxes(int a) const {
+    std::vector<int> axes;
+    for (int j = 0; j < n_; ++j) {
+      if (j != a) axes.push_back(j);
+    }
+    return axes;
+  }
+
+  /// The faces of the box of patches_ that fail the face graph test, as (fixed axis, upper):
+  /// every one, or (`all` false) the first.
+  std::vector<std::pair<int, bool>> failingFaces(bool all = true) {
+    std::vector<std::pair<int, bool>> failing;
+    for (int a = 0; a < n_; ++a) {
+      const std::vector<int> axes = freeAxes(a);
+      for (int side = 0; side < 2; ++side) {
+        if (faceGraph(a, side == 1, axes)) continue;
+        failing.emplace_back(a, side == 1);
+        if (!all) return failing;
+      }
+    }
+    return failing;
+  }
+
+  /// The first face (2 a + side) of the box of patches_ that fails the face graph test, or -1.
+  int failingFace() {
+    const auto failing = failingFaces(false);
+    return failing.empty() ? -1 : 2 * failing.front().first + int(failing.front().second);
+  }
+
+  /// Face (a, upper) of the block (level, lo) leaf face by leaf face: no unproven face inside
+  /// it (its crossings on the leaf faces' common edges are proven, so the link sees every
+  /// piece of M on it) and each leaf face empty or a graph. Leaves patches_ changed.
+  bool subFacesGraph(int level, const std::vector<std::int32_t>& lo,
+                     const std::vector<std::int32_t>& members, int a, bool upper) {
+    const std::vector<int> axes = freeAxes(a);
+    for (std::int32_t c : members) {
+      if (tree_.index(c)[a] != (upper ? lo[a] + 1 : lo[a])) continue;
+      for (std::int32_t f : unprovenOf_[c]) {
+        bool up = false;
+        if (blockFaceAxis(unprovenFaces_[f], level, lo, up) == a && up == upper) return false;
+      }
+      restrictTo(c);
+      if (!faceGraph(a, upper, axes)) return false;
+    }
+    return true;
+  }
+
+  /// The graph test of one face of the leaf in patches_ (fixed axis a at its lower or upper
+  /// end): empty, or a graph over one of the free axes.
+  bool faceGraph(int a, bool upper, const std::vector<int>& axes) {
+    jacobian_.assign(std::size_t(m_) * n_, Interval<S>());
+    for (int i = 0; i < m_; ++i) {
+      const Bernstein<S> face = patches_[i].faceSlice(a, upper);
+      if (clearsRange(face, level_[i], level_[i], margins_[i])) return true;
+      for (int j : axes)
+        jacobian_[std::size_t(i) * n_ + j] = derivativeHull(face, j < a ? j : j - 1, margins_[i]);
+    }
+    if (graphTest_.graph(jacobian_, axes)) return true;
+    Box<S> face = patches_.front().domain();
+    face.lo[a] = face.hi[a] = upper ? face.hi[a] : face.lo[a];
+    // Near a point where M is tangent to the face's hyperplane no block is regular, and M
+    // usually misses the face although each equation alone meets it.
+    return combinationExcludes(in_.system, std::span<const S>(level_), face,
+                               std::span<const Interval<S>>(jacobian_), axes) ||
+           intervalEmpty(face, false);
+  }
+
+  /// The certificate of every active leaf (docs/certificate.md) into failure_.
+  void certify() {
+    std::vector<std::vector<std::int32_t>> incident(tree_.size());
+    for (std::size_t p = 0; p < polygons_.size(); ++p) {
+      for (int i = 0; i < polygons_[p].size; ++i) {
+        if (polygons_[p].node[i] >= 0)
+          incident[polygons_[p].node[i]].push_back(static_cast<std::int32_t>(p));
+      }
+    }
+    for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
+      failure_[c] = Failure::kNone;
+      if (!tree_.active(c)) continue;
+      if (empty_[c] == 1) {
+        // M_c misses the leaf; M may not (it lies 1e-8 h away): where it meets the leaf, the
+        // isotopy from M to M_c needs the Jacobian's rank there.
+        if (!bandEmpty_[c] && !cellGraph(c) && !intervalEmpty(leafBox(c), true))
+          failure_[c] = Failure::kGraph;
+        continue;
+      }
+      if (unproven_[c]) {
+        failure_[c] = Failure::kCrossing;
+      } else if (!cellGraph(c) && !intervalEmpty(leafBox(c), true)) {
+        failure_[c] = Failure::kGraph;
+      } else if (k_ == 2 && !facesGraph(c)) {
+        failure_[c] = Failure::kFaceGraph;
+      } else if (!simpleLink(c, polygons_, incident[c])) {
+        failure_[c] = Failure::kLink;
+      }
+    }
+    mergeBlocks(incident);
+  }
+
+  /// Tangency (docs/certificate.md, "Blocks"): where M touches a grid hyperplane, M_c crosses
+  /// it in a small loop or in two crossings closer than any refinement separates, so neither
+  /// leaf next to the touching point is simple; the block of 2^n leaves of one level around the
+  /// point often is. Certifies such blocks of failing leaves (the first that passes of the
+  /// candidates around each leaf); in the mesh a block is one region with one vertex per piece.
+  ///
+  /// Along a curve of tangency (a circle of M in a grid plane) every block is cut by the curve
+  /// where it leaves the block, so an unproven face lies on the block's boundary. Such a
+  /// block is kept *tentatively* when the face lies inside one face of the block's box; it
+  /// stands when the leaves across that face are in blocks too (then the block face is shared
+  /// and the polygons around the unproven face join two block nodes only, which the mesh
+  /// drops) and its link, with every block one node, is one cycle. verifyBlocks dissolves the
+  /// blocks that do not stand until the rest do.
+  void mergeBlocks(const std::vector<std::vector<std::int32_t>>& incident) {
+    blocks_.clear(), blockLo_.clear(), blockLevel_.clear(), blockSaved_.clear();
+    blockEmpties_.clear();
+    block_.assign(tree_.size(), -1);
+    unprovenOf_.resize(tree_.size());
+    bool tentative = false;
+    for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
+      if (!tree_.active(c) || failure_[c] == Failure::kNone || block_[c] >= 0) continue;
+      // A leaf whose own graph test fails: the graph test on a block around it would too
+      // (a wider box, wider Jacobian enclosures); only refinement can help.
+      if (failure_[c] == Failure::kGraph) continue;
+      const auto candidates = blockCandidates(c);
+      bool made = false;
+      for (const std::vector<std::int32_t>& lo : candidates) {
+        if ((made = tryBlock(tree_.level(c), lo, incident, false))) break;
+      }
+      for (const std::vector<std::int32_t>& lo : made ? decltype(candidates){} : latticeBlocks(c)) {
+        if ((made = tryBlock(tree_.level(c), lo, incident, true))) break;
+      }
+      tentative = tentative || made;
+    }
+    if (tentative) verifyBlocks(incident);
+  }
+
+  /// The blocks for leaf c on a curve of tangency: for each grid plane next to c that holds
+  /// every unproven face next to c, the block that straddles the plane and has even lower
+  /// corners along the other axes (so that the blocks along the curve tile it face to face).
+  std::vector<std::vector<std::int32_t>> latticeBlocks(std::int32_t c) const {
+    const int level = tree_.level(c);
+    const auto ci = tree_.index(c);
+    // (axis, plane index at this level) pairs common to every unproven face.
+    std::vector<std::pair<int, std::int64_t>> common;
+    bool first = true;
+    for (std::int32_t f : unprovenOf_[c]) {
+      const FaceRef& face = unprovenFaces_[f];
+      const int shift = face.level - level;
+      if (shift < 0) return {};
+      std::vector<std::pair<int, std::int64_t>> planes;
+      for (int t = 0; t < k_; ++t) {
+        const int j = face.axes[t];
+        const std::int64_t x = face.corner[j];
+        if ((x & ((std::int64_t{1} << shift) - 1)) != 0) continue;
+        const std::int64_t p = x >> shift;
+        if (p == ci[j] || p == ci[j] + 1) planes.emplace_back(j, p);
+      }
+      if (first)
+        common = planes;
+      else
+        std::erase_if(common, [&](const auto& q) {
+          return std::find(planes.begin(), planes.end(), q) == planes.end();
+        });
+      first = false;
+    }
+    std::vector<std::vector<std::int32_t>> blocks;
+    for (const auto& [axis, plane] : common) {
+      std::vector<std::int32_t> lo(n_);
+      for (int j = 0; j < n_; ++j) lo[j] = ci[j] & ~std::int32_t{1};
+      lo[axis] = static_cast<std::int32_t>(plane - 1);
+      blocks.push_back(std::move(lo));
+    }
+    return blocks;
+  }
+
+  /// Dissolves the blocks that do not stand (mergeBlocks) until every remaining one does.
+  void verifyBlocks(const std::vector<std::vector<std::int32_t>>& incident) {
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (std::size_t b = 0; b < blocks_.size(); ++b) {
+        if (blocks_[b].empty() || blockStands(b, incident)) continue;
+        for (std::size_t i = 0; i < blocks_[b].size(); ++i) {
+          block_[blocks_[b][i]] = -1;
+          failure_[blocks_[b][i]] = blockSaved_[b][i];
+        }
+        blocks_[b].clear();
+        changed = true;
+      }
+    }
+  }
+
+  /// Whether block b stands among the others: every unproven face next to it inside it, or
+  /// inside one face of its box with block leaves across, and its link (every block one node)
+  /// one cycle.
+  bool blockStands(std::size_t b, const std::vector<std::vector<std::int32_t>>& incident) const {
+    const int level = blockLevel_[b];
+    const std::vector<std::int32_t>& lo = blockLo_[b];
+    const auto stands = [&](const std::vector<std::int32_t>& faces) {
+      return std::all_of(faces.begin(), faces.end(), [&](std::int32_t f) {
+        return inside(unprovenFaces_[f], level, lo) ||
+               sharedBlockFace(unprovenFaces_[f], level, lo);
+      });
+    };
+    for (std::int32_t c : blocks_[b]) {
+      if (!stands(unprovenOf_[c])) return false;
+    }
+    for (CellKey key : blockEmpties_[b]) {
+      auto it = unprovenOfEmpty_.find(key);
+      if (it != unprovenOfEmpty_.end() && !stands(it->second)) return false;
+    }
+    std::vector<Polygon> link;
+    std::vector<std::int32_t> ps;
+    const std::int64_t front = blocks_[b].front();
+    for (std::int32_t p : blockPolygons(blocks_[b], incident)) {
+      const Polygon q = collapsed(polygons_[p], [&](std::int64_t node) { return blockNode(node); });
+      if (q.size < (k_ == 1 ? 2 : 3)) continue;  // inside the block, or between two blocks
+      if (std::count(q.node.begin(), q.node.begin() + q.size, front) != 1) return false;
+      ps.push_back(static_cast<std::int32_t>(link.size()));
+      link.push_back(q);
+    }
+    return simpleLink(front, link, ps);
+  }
+
+  /// The polygons incident to any of the leaves, once each.
+  static std::vector<std::int32_t> blockPolygons(
+      const std::vector<std::int32_t>& members,
+      const std::vector<std::vector<std::int32_t>>& incident) {
+    std::vector<std::int32_t> around;
+    for (std::int32_t c : members)
+      around.insert(around.end(), incident[c].begin(), incident[c].end());
+    std::sort(around.begin(), around.end());
+    around.erase(std::unique(around.begin(), around.end()), around.end());
+    return around;
+  }
+
+  /// Whether the face lies inside exactly one face of the block's box (level, lo) and every
+  /// leaf across that face next to it is a leaf of `level` in a block.
+  bool sharedBlockFace(const FaceRef& face, int level, const std::vector<std::int32_t>& lo) const {
+    const int shift = face.level - level;
+    const std::int64_t scale = std::int64_t{1} << shift;
+    bool upper = false;
+    const int axis = blockFaceAxis(face, level, lo, upper);
+    if (axis < 0) return false;
+    // The leaves across: one index along the axis, one or two along the other fixed axis.
+    std::vector<std::int32_t> across(n_);
+    int other = -1;
+    for (int j = 0; j < n_; ++j) {
+      const bool fixed = j == face.axes[0] || (k_ == 2 && j == face.axes[1]);
+      across[j] = static_cast<std::int32_t>(face.corner[j] >> shift);
+      if (j == axis)
+        across[j] = upper ? lo[j] + 2 : lo[j] - 1;
+      else if (fixed && (face.corner[j] & (scale - 1)) == 0)
+        other = j;  // on a leaf plane
+    }
+    for (int s = 0; s < (other >= 0 ? 2 : 1); ++s) {
+      std::vector<std::int32_t> index = across;
+      if (other >= 0) index[other] -= s;
+      const Occupant o = tree_.find(level, index);
+      if (o.kind != Occupant::Kind::kLeaf || tree_.level(o.leaf) != level || block_[o.leaf] < 0)
+        return false;
+    }
+    return true;
+  }
+
+  /// The lower corners of the blocks of 2^n leaves that hold leaf c, the one centred nearest
+  /// its trouble point first, then those that differ from it along more and more axes (at
+  /// most kBlockTries).
+  std::vector<std::vector<std::int32_t>> blockCandidates(std::int32_t c) const {
+    constexpr std::size_t kBlockTries = 16;
+    const auto ci = tree_.index(c);
+    const Box<S> box = leafBox(c);
+    std::uint32_t below = 0;  // bit j: the preferred block extends below the leaf along j
+    for (int j = 0; j < n_; ++j) {
+      const S t = hasTrouble_[c] ? trouble_[std::size_t(c) * n_ + j] : box.lo[j];
+      if (t < (box.lo[j] + box.hi[j]) / 2) below |= 1u << j;
+    }
+    std::vector<std::uint32_t> flips(std::size_t{1} << n_);
+    std::iota(flips.begin(), flips.end(), 0u);
+    std::stable_sort(flips.begin(), flips.end(), [](std::uint32_t a, std::uint32_t b) {
+      return std::popcount(a) < std::popcount(b);
+    });
+    std::vector<std::vector<std::int32_t>> out;
+    for (std::size_t t = 0; t < std::min(kBlockTries, flips.size()); ++t) {
+      std::vector<std::int32_t> lo(ci.begin(), ci.end());
+      for (int j = 0; j < n_; ++j)
+        lo[j] -= static_cast<std::int32_t>(((below ^ flips[t]) >> j) & 1);
+      out.push_back(std::move(lo));
+    }
+    return out;
+  }
+
+  /// The certificate of the block of 2^n leaves of `level` with lower corner `lo`: its leaves
+  /// free, one polynomial piece, every unproven face inside it, the crossings on its boundary
+  /// one simple piece, and the graph and face graph tests on its box.
+  bool tryBlock(int level, const std::vector<std::int32_t>& lo,
+                const std::vector<std::vector<std::int32_t>>& incident, bool tentative) {
+    std::vector<std::int32_t> members;
+    std::vector<CellKey> empties;
+    if (!blockMembers(level, lo, members, empties)) return false;
+    // Every unproven face next to the block's regions lies inside it (tentative: or inside
+    // one face of its box, for verifyBlocks to check the leaves across).
+    const auto within = [&](const std::vector<std::int32_t>& faces, bool relaxed) {
+      return std::all_of(faces.begin(), faces.end(), [&](std::int32_t f) {
+        return inside(unprovenFaces_[f], level, lo) ||
+               (relaxed && onOneBlockFace(unprovenFaces_[f], level, lo));
+      });
+    };
+    for (std::int32_t c : members) {
+      if (!within(unprovenOf_[c], tentative)) return false;
+    }
+    for (CellKey key : empties) {
+      auto it = unprovenOfEmpty_.find(key);
+      if (it != unprovenOfEmpty_.end() && !within(it->second, tentative)) return false;
+    }
+    // The link: now, or (tentative) once the neighbour blocks exist, in verifyBlocks.
+    std::vector<Polygon> link;
+    std::vector<std::int32_t> ps;
+    if (!tentative &&
+        (!blockLink(members, incident, link, ps) || !simpleLink(members.front(), link, ps)))
+      return false;
+    // The graph tests on the block's box.
+    std::vector<std::int32_t> hi(lo);
+    for (std::int32_t& i : hi) ++i;
+    Box<S> box = cellBox(tree_.grid(level), domain_, lo);
+    box.hi = cellBox(tree_.grid(level), domain_, hi).hi;
+    const RootForms& rf = rootForms(lo, level);
+    margins_ = rf.margins;
+    for (int i = 0; i < m_; ++i) patches_[i] = rf.forms[i].restrict(box);
+    if (!patchesGraph() && !intervalEmpty(box, true)) return false;
+    if (k_ == 2) {
+      // A face of the block's box that fails as a whole: a tentative block may prove it leaf
+      // face by leaf face (subFacesGraph).
+      for (const auto& [a, upper] : failingFaces(tentative)) {
+        if (!tentative || !subFacesGraph(level, lo, members, a, upper)) return false;
+      }
+    }
+    std::vector<Failure> saved;
+    for (std::int32_t c : members) {
+      block_[c] = static_cast<std::int32_t>(blocks_.size());
+      saved.push_back(failure_[c]);
+      failure_[c] = Failure::kNone;
+    }
+    blocks_.push_back(std::move(members));
+    blockLo_.push_back(lo);
+    blockLevel_.push_back(level);
+    blockEmpties_.push_back(std::move(empties));
+    blockSaved_.push_back(std::move(saved));
+    return true;
+  }
+
+  /// The leaves of a block: every region of it an active leaf of `level` in no other block,
+  /// inside one polynomial piece of the input.
+  bool blockMembers(int level, const std::vector<std::int32_t>& lo,
+                    std::vector<std::int32_t>& members, std::vector<CellKey>& empties) const {
+    const std::int64_t top = tree_.grid(level).cellsPerAxis();
+    const int patchLevel = in_.problem.roots.empty() ? 0 : in_.problem.rootLevel;
+    for (int j = 0; j < n_; ++j) {
+      if (lo[j] < 0 || lo[j] + 2 > top) return false;
+      if ((lo[j] >> (level - patchLevel)) != ((lo[j] + 1) >> (level - patchLevel))) return false;
+    }
+    std::vector<std::int32_t> position(n_);
+    for (std::uint32_t corner = 0; corner < (1u << n_); ++corner) {
+      for (int j = 0; j < n_; ++j)
+        position[j] = lo[j] + static_cast<std::int32_t>((corner >> j) & 1);
+      const Occupant o = tree_.find(level, position);
+      // A base cell the bounding excluded: M_c does not enter it (it would be a touch leaf).
+      if (o.kind == Occ::kEmpty) {
+        if (std::find(empties.begin(), empties.end(), o.key) == empties.end())
+          empties.push_back(o.key);
+        continue;
+      }
+      if (o.kind != Occ::kLeaf || tree_.level(o.leaf) != level || !tree_.active(o.leaf) ||
+          block_[o.leaf] >= 0)
+        return false;
+      members.push_back(o.leaf);
+    }
+    return !members.empty();
+  }
+
+  /// The polygons of the block's boundary with its leaves as one node (members.front());
+  /// those inside it drop out. False when a polygon meets the block twice (not a box).
+  bool blockLink(const std::vector<std::int32_t>& members,
+                 const std::vector<std::vector<std::int32_t>>& incident, std::vector<Polygon>& link,
+                 std::vector<std::int32_t>& ps) const {
+    for (std::int32_t p : blockPolygons(members, incident)) {
+      const Polygon q = collapsed(polygons_[p], [&](std::int64_t node) {
+        return std::find(members.begin(), members.end(), node) != members.end() ? members.front()
+                                                                                : node;
+      });
+      if (q.size < (k_ == 1 ? 2 : 3)) continue;  // inside the block
+      if (std::count(q.node.begin(), q.node.begin() + q.size, members.front()) != 1) return false;
+      ps.push_back(static_cast<std::int32_t>(link.size()));
+      link.push_back(q);
+    }
+    return true;
+  }
+
+  /// A polygon node as the mesh sees it: a leaf in a block is the block's first leaf.
+  std::int64_t blockNode(std::int64_t node) const {
+    const bool inBlock = node >= 0 && std::size_t(node) < block_.size() && block_[node] >= 0;
+    return inBlock ? std::int64_t{blocks_[block_[node]].front()} : node;
+  }
+
+  /// A polygon with its nodes mapped by `map`, equal neighbours merged (cyclically).
+  template <class Map>
+  static Polygon collapsed(const Polygon& poly, const Map& map) {
+    Polygon q = poly;
+    q.size = 0;
+    for (int i = 0; i < poly.size; ++i) {
+      const std::int64_t node = map(poly.node[i]);
+      if (q.size > 0 && q.node[q.size - 1] == node) continue;
+      q.node[q.size++] = node;
+    }
+    if (q.size > 1 && q.node[q.size - 1] == q.node[0]) --q.size;
+    return q;
+  }
+
+  /// The mesh's polygons with every certified block as one node (its first leaf), when every
+  /// leaf is certified: then the mesh is the dual of the certified decomposition. Otherwise
+  /// the blocks stay apart: merging a block's vertices is an edge contraction, and next to an
+  /// uncertified leaf nothing proves its link condition.
+  void collapseBlocks(bool certified) {
+    if (blocks_.empty() || !certified) return;
+    std::vector<Polygon> kept;
+    for (const Polygon& p : polygons_) {
+      const Polygon q = collapsed(p, [&](std::int64_t node) { return blockNode(node); });
+      if (q.size >= (k_ == 1 ? 2 : 3)) kept.push_back(q);
+    }
+    polygons_ = std::move(kept);
+  }
+
+  /// The link of leaf c (k = 2): one edge per polygon, between the polygon's two nodes next to
+  /// c; `nodes` receives the distinct neighbour nodes the edges number.
+  static std::vector<std::array<int, 2>> linkEdges(std::int64_t c,
+                                                   const std::vector<Polygon>& polygons,
+                                                   const std::vector<std::int32_t>& ps,
+                                                   std::vector<std::int64_t>& nodes) {
+    std::vector<std::array<int, 2>> edges;
+    for (std::int32_t p : ps) {
+      const Polygon& poly = polygons[p];
+      int at = 0;
+      while (poly.node[at] != c) ++at;
+      std::array<int, 2> e{};
+      for (int s = 0; s < 2; ++s) {
+        const std::int64_t node = poly.node[(at + (s ? poly.size - 1 : 1)) % poly.size];
+        auto it = std::find(nodes.begin(), nodes.end(), node);
+        e[s] = static_cast<int>(it - nodes.begin());
+        if (it == nodes.end()) nodes.push_back(node);
+      }
+      edges.push_back(e);
+    }
+    return edges;
+  }
+
+  /// Whether the crossings on the boundary of leaf c form one simple piece: none, or two
+  /// (k = 1), or one cycle through every neighbour region exactly twice (k = 2; the regions
+  /// beyond the domain are nodes too, so a surface with boundary closes its loop there).
+  bool simpleLink(std::int64_t c, const std::vector<Polygon>& polygons,
+                  const std::vector<std::int32_t>& ps) const {
+    if (ps.empty()) return true;
+    if (k_ == 1) return ps.size() == 2;
+    std::vector<std::int64_t> nodes;
+    const std::vector<std::array<int, 2>> edges = linkEdges(c, polygons, ps, nodes);
+    UnionFind uf{std::vector<int>(nodes.size())};
+    std::iota(uf.parent.begin(), uf.parent.end(), 0);
+    std::vector<int> degree(nodes.size(), 0);
+    for (const auto& e : edges) {
+      uf.unite(e[0], e[1]);
+      ++degree[e[0]];
+      ++degree[e[1]];
+    }
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      if (degree[i] != 2 || uf.find(int(i)) != uf.find(0)) return false;
+    }
+    return true;
+  }
+
+  /// Crossings, certificates and refinement until every leaf is certified or at the maximum
+  /// level (or the leaf budget is spent). Returns the degenerate crossings of the last pass.
+  std::int64_t refineAndCertify() {
+    tree_ = CellTree(grid_, tree_.maxLevel());
+    for (std::size_t c = 0; c < in_.cells.size(); ++c)
+      tree_.addLeaf(grid_.depth, in_.cells.cell(c), true);
+    tree_.setBaseCells(static_cast<std::int32_t>(in_.cells.size()));
+    faces_.clear();
+    empty_.clear(), bandEmpty_.clear(), unproven_.clear(), stuck_.clear(), singular_.clear(),
+        graph_.clear(), faceGraph_.clear();
+    failure_.clear();
+    trouble_.clear(), hasTrouble_.clear();
+    refined_ = 0;
+    budgetSpent_ = false;
+    while (true) {
+      std::fill(unproven_.begin(), unproven_.end(), 0);
+      std::fill(stuck_.begin(), stuck_.end(), 0);
+      std::fill(singular_.begin(), singular_.end(), 0);
+      const std::int64_t degenerate = crossFaces();
+      grow();
+      certify();
+      // Refine the leaves that fail, above the maximum level.
+      std::vector<std::int32_t> refine;
+      for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
+        if (tree_.active(c) && failure_[c] != Failure::kNone && tree_.level(c) < tree_.maxLevel() &&
+            !(failure_[c] == Failure::kCrossing && stuck_[c]))
+          refine.push_back(c);
+      }
+      // Certified (or as far as it goes): then the leaves the chord error asks for.
+      if (refine.empty() && in_.tolerance > 0 && refining_) refine = chordLeaves();
+      if (refine.empty() || !in_.refine || !refining_) return degenerate;
+      if (tree_.size() + refine.size() * (std::size_t{1} << n_) > maxLeaves_) {
+        budgetSpent_ = true;
+        return degenerate;
+      }
+      for (std::int32_t c : refine) {
+        const Box<double> box = cellBox(tree_.grid(tree_.level(c)), grid_.domain, tree_.index(c));
+        tree_.refine(c, in_.refine(box));
+        ++refined_;
+      }
+      grow();
+    }
+  }
+
+  /// `--tolerance`: the leaves below the maximum level that are nodes of a mesh polygon whose
+  /// simplices have a barycentre farther than the tolerance from its Newton projection onto M
+  /// (the analysis's chord error). Each leaf's vertex is taken as the projection of the mean of
+  /// its crossings, as the dual complex places it (a block's: of the block's crossings).
+  std::vector<std::int32_t> chordLeaves() const {
+    const std::size_t count = tree_.size();
+    const auto owner = [&](std::int64_t c) { return static_cast<std::size_t>(blockNode(c)); };
+    std::vector<S> vertex(count * n_, S(0));
+    std::vector<std::int32_t> crossings(count, 0);
+    for (const Polygon& poly : polygons_) {
+      if (poly.outside) continue;
+      for (int i = 0; i < poly.size; ++i) {
+        const std::size_t c = owner(poly.node[i]);
+        for (int j = 0; j < n_; ++j)
+          vertex[c * n_ + j] += rootPoints_[std::size_t(poly.root) * n_ + j];
+        ++crossings[c];
+      }
+    }
+    std::vector<std::uint8_t> usable(count, 0);
+    std::vector<S> x(n_);
+    for (std::size_t c = 0; c < count; ++c) {
+      if (crossings[c] == 0) continue;
+      for (int j = 0; j < n_; ++j) x[j] = vertex[c * n_ + j] / crossings[c];
+      usable[c] = in_.project(x).converged;
+      std::copy(x.begin(), x.end(), vertex.begin() + std::ptrdiff_t(c * n_));
+    }
+    for (std::size_t c = 0; c < count; ++c) {  // block members share the block's vertex
+      const std::size_t o = owner(std::int64_t(c));
+      if (o == c) continue;
+      usable[c] = usable[o];
+      std::copy_n(vertex.begin() + std::ptrdiff_t(o * n_), n_,
+                  vertex.begin() + std::ptrdiff_t(c * n_));
+    }
+    const S tolerance = S(in_.tolerance);
+    std::vector<std::uint8_t> marked(count, 0);
+    for (const Polygon& poly : polygons_) {
+      if (poly.outside || !usable[poly.node[0]]) continue;
+      bool all = true;
+      for (int i = 0; i < poly.size; ++i) all = all && usable[poly.node[i]];
+      if (!all || !chordAbove(poly, vertex, tolerance)) continue;
+      for (int i = 0; i < poly.size; ++i) {
+        const auto c = static_cast<std::size_t>(poly.node[i]);
+        if (tree_.level(std::int32_t(c)) < tree_.maxLevel()) marked[c] = 1;
+      }
+    }
+    std::vector<std::int32_t> leaves;
+    for (std::size_t c = 0; c < count; ++c) {
+      if (marked[c] && tree_.active(std::int32_t(c))) leaves.push_back(std::int32_t(c));
+    }
+    return leaves;
+  }
+
+  /// Whether a simplex of the polygon (its edge, or its triangles split along the shorter
+  /// diagonal as addSimplices does) has its barycentre farther than `tolerance` from M.
+  bool chordAbove(const Polygon& poly, const std::vector<S>& vertex, const S& tolerance) const {
+    const auto at = [&](int i, int j) -> const S& {
+      return vertex[std::size_t(poly.node[i]) * n_ + j];
+    };
+    std::vector<std::array<int, 3>> simplices;
+    if (poly.size == 2) simplices.push_back({0, 1, -1});
+    if (poly.size == 3) simplices.push_back({0, 1, 2});
+    if (poly.size == 4) {
+      S d02 = 0, d13 = 0;
+      for (int j = 0; j < n_; ++j) {
+        d02 += (at(0, j) - at(2, j)) * (at(0, j) - at(2, j));
+        d13 += (at(1, j) - at(3, j)) * (at(1, j) - at(3, j));
+      }
+      if (d02 <= d13)
+        simplices.insert(simplices.end(), {{0, 1, 2}, {0, 2, 3}});
+      else
+        simplices.insert(simplices.end(), {{0, 1, 3}, {1, 2, 3}});
+    }
+    std::vector<S> centre(n_), projected(n_);
+    for (const auto& s : simplices) {
+      const int corners = s[2] < 0 ? 2 : 3;
+      for (int j = 0; j < n_; ++j) {
+        S sum = 0;
+        for (int t = 0; t < corners; ++t) sum += at(s[t], j);
+        centre[j] = sum / corners;
+      }
+      projected = centre;
+      if (!in_.project(projected).converged) continue;  // the analysis leaves it out too
+      S d2 = 0;
+      for (int j = 0; j < n_; ++j) d2 += (projected[j] - centre[j]) * (projected[j] - centre[j]);
+      if (d2 > tolerance * tolerance) return true;
+    }
+    return false;
+  }
+
+  /// The topology record from the final tree.
+  void record(TopologyRecord& t, std::int64_t degenerate) const {
+    t.baseLevel = grid_.depth;
+    t.maxDepth = tree_.maxLevel();
+    t.maxLevel = grid_.depth;
+    t.refinedCells = refined_;
+    for (const auto& block : blocks_) t.blockCells += static_cast<std::int64_t>(block.size());
+    std::map<std::string, std::int64_t> reasons;
+    std::int64_t stuck = 0;
+    for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
+      if (!tree_.active(c)) continue;
+      t.maxLevel = std::max(t.maxLevel, tree_.level(c));
+      if (failure_[c] == Failure::kNone) {
+        ++t.certifiedCells;
+        continue;
+      }
+      ++t.uncertifiedCells;
+      ++reasons[failureName(failure_[c])];
+      stuck += failure_[c] == Failure::kCrossing && stuck_[c];
+      UncertifiedCell u;
+      const Box<double> box = cellBox(tree_.grid(tree_.level(c)), grid_.domain, tree_.index(c));
+      u.lo = box.lo;
+      u.hi = box.hi;
+      u.level = tree_.level(c);
+      u.reason = failureName(failure_[c]);
+      t.uncertified.push_back(std::move(u));
+    }
+    std::ostringstream why;
+    if (t.uncertifiedCells > 0) {
+      why << t.uncertifiedCells << " cell" << (t.uncertifiedCells == 1 ? "" : "s")
+          << " uncertified down to level " << t.maxLevel << " of " << t.maxDepth << " (";
+      bool first = true;
+      for (const auto& [name, count] : reasons) {
+        why << (first ? "" : ", ") << name << ": " << count;
+        first = false;
+      }
+      why << ")";
+      if (stuck > 0) {
+        why << "; " << stuck << " next to crossings no refinement separates (M touches a grid "
+            << "plane, or a singular point)";
+      }
+      if (budgetSpent_) why << "; refinement stopped at " << maxLeaves_ << " leaves";
+    } else if (degenerate > 0) {
+      why << degenerate << " crossings within rounding of a face boundary";
+    }
+    t.reason = why.str();
+    t.certified = t.reason.empty();
+  }
+
+  /// The dual complex of the final tree (docs/crossing.md, steps 3 and 4), on the polygons
+  /// that lie inside the domain.
+  void buildComplex(ConnectionOutput<S>& out) {
+    collapseBlocks(out.topology.certified);
+    const std::size_t count = tree_.size();
+    std::vector<std::int32_t> mesh;
+    for (std::size_t p = 0; p < polygons_.size(); ++p) {
+      if (!polygons_[p].outside) mesh.push_back(static_cast<std::int32_t>(p));
+    }
+    std::vector<std::vector<std::int32_t>> incident(count);
+    for (std::int32_t p : mesh) {
+      for (int i = 0; i < polygons_[p].size; ++i) incident[polygons_[p].node[i]].push_back(p);
+    }
+    const auto slotOf = [&](std::int32_t p, std::size_t c) {
+      int at = 0;
+      while (polygons_[p].node[at] != static_cast<std::int64_t>(c)) ++at;
+      return at;
+    };
+    // piece[p * 4 + i]: the piece of M in leaf node[i] that polygon p belongs to.
+    std::vector<std::int32_t> piece(polygons_.size() * 4, 0), pieceCount(count, 0);
+    for (std::size_t c = 0; c < count; ++c)
+      pieceCount[c] = pieces(c, incident[c], piece, slotOf, out);
+    // Dual vertices: the Newton projection of the mean of each piece's crossings.
+    std::vector<std::int32_t> firstVertex(count, -1);
+    std::vector<S> sums, x(n_);
+    std::vector<std::int32_t> counts;
+    for (std::size_t c = 0; c < count; ++c) {
+      if (pieceCount[c] == 0) continue;
+      const S width = S(tree_.grid(tree_.level(c)).cellWidth(0));
+      sums.assign(std::size_t(pieceCount[c]) * n_, S(0));
+      counts.assign(pieceCount[c], 0);
+      for (std::int32_t p : incident[c]) {
+        const std::int32_t q = piece[p * 4 + slotOf(p, c)];
+        for (int j = 0; j < n_; ++j)
+          sums[std::size_t(q) * n_ + j] += rootPoints_[std::size_t(polygons_[p].root) * n_ + j];
+        ++counts[q];
+      }
+      for (int q = 0; q < pieceCount[c]; ++q) {
+        for (int j = 0; j < n_; ++j) x[j] = sums[std::size_t(q) * n_ + j] / counts[q];
+        const std::vector<S> mean = x;
+        if (!in_.project(x).converged) {
+          // Reported, never written silently off M (the analysis measures its residual too).
+          x = mean;
+          ++out.offManifoldVertices;
+        }
+        const std::int32_t v = out.complex.addVertex(x, tree_.baseCell(std::int32_t(c)));
+        if (q == 0) firstVertex[c] = v;
+        // Singular cells: the Jacobian at the vertex is (nearly) rank-deficient relative to
+        // the cell size, as at self-intersections and cone points.
+        const Vector<S> sigma = singularValuesAt<S>(in_.system, x);
+        if (q == 0 && (singular_[c] || sigma(0) == 0 || sigma(m_ - 1) <= sigma(0) * width * 1e-3))
+          ++out.singularCells;
+      }
+    }
+    for (std::int32_t p : mesh) addSimplices(polygons_[p], p, firstVertex, piece, out);
+  }
+
+  /// The pieces of M in leaf c: for k = 2 the components of the link of its vertex (one edge
+  /// per incident polygon, between the polygon's two nodes next to c), one per sheet of M in
+  /// the leaf; for k = 1 one. Counts the leaves whose piece is not simple.
+  template <class SlotOf>
+  std::int32_t pieces(std::size_t c, const std::vector<std::int32_t>& ps,
+                      std::vector<std::int32_t>& piece, const SlotOf& slotOf,
+                      ConnectionOutput<S>& out) const {
+    if (ps.empty()) return 0;
+    const bool boundary = onDomainBoundary(static_cast<std::int32_t>(c));
+    if (k_ == 1) {
+      for (std::int32_t p : ps) piece[p * 4 + slotOf(p, c)] = 0;
+      if (ps.size() != 2 && !(boundary && ps.size() == 1)) ++out.ambiguousCells;
+      return 1;
+    }
+    std::vector<std::int64_t> nodes;
+    const std::vector<std::array<int, 2>> edges =
+        linkEdges(static_cast<std::int64_t>(c), polygons_, ps, nodes);
+    UnionFind uf{std::vector<int>(nodes.size())};
+    std::iota(uf.parent.begin(), uf.parent.end(), 0);
+    for (const auto& e : edges) uf.unite(e[0], e[1]);
+    std::vector<int> componentOf(nodes.size(), -1), degree(nodes.size(), 0);
+    int components = 0;
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      const int r = uf.find(static_cast<int>(i));
+      if (componentOf[r] < 0) componentOf[r] = components++;
+    }
+    for (const auto& e : edges) ++degree[e[0]], ++degree[e[1]];
+    for (std::size_t q = 0; q < ps.size(); ++q)
+      piece[ps[q] * 4 + slotOf(ps[q], c)] = componentOf[uf.find(edges[q][0])];
+    // One simple piece: one component that is a cycle (or a path on the domain boundary).
+    int ends = 0;
+    bool simple = components == 1;
+    for (int d : degree) {
+      if (d == 1) ++ends;
+      simple = simple && d <= 2;
+    }
+    simple = simple && (ends == 0 || (boundary && ends == 2));
+    if (!simple) ++out.ambiguousCells;
+    return components;
+  }
+
+  /// Whether leaf c (or a leaf of its block) touches the domain boundary.
+  bool onDomainBoundary(std::int32_t c) const {
+    const auto touches = [&](std::int32_t leaf) {
+      const auto ci = tree_.index(leaf);
+      const std::int64_t top = tree_.grid(tree_.level(leaf)).cellsPerAxis();
+      return std::any_of(ci.begin(), ci.end(),
+                         [&](std::int32_t i) { return i == 0 || i + 1 == top; });
+    };
+    if (c < static_cast<std::int32_t>(block_.size()) && block_[c] >= 0) {
+      const auto& members = blocks_[block_[c]];
+      return std::any_of(members.begin(), members.end(), touches);
+    }
+    return touches(c);
+  }
+
+  /// The simplices of one mesh polygon: an edge (k = 1), a triangle, or a quad split along its
+  /// shorter diagonal.
+  void addSimplices(const Polygon& poly, std::int32_t p, const std::vector<std::int32_t>& first,
+                    const std::vector<std::int32_t>& piece, ConnectionOutput<S>& out) const {
+    std::array<std::int32_t, 4> v{};
+    for (int i = 0; i < poly.size; ++i) v[i] = first[poly.node[i]] + piece[p * 4 + i];
+    if (k_ == 1) {
+      out.complex.addSimplex(std::array<std::int32_t, 2>{v[0], v[1]});
+      return;
+    }
+    if (poly.size == 3) {
+      out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[1], v[2]});
+      return;
+    }
+    const auto distance = [&](int a, int b) {
+      S sum = 0;
+      for (int j = 0; j < n_; ++j) {
+        const S diff = out.complex.vertices[std::size_t(v[a]) * n_ + j] -
+                       out.complex.vertices[std::size_t(v[b]) * n_ + j];
+        sum += diff * diff;
+      }
+      return sum;
+    };
+    if (distance(0, 2) <= distance(1, 3)) {
+      out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[1], v[2]});
+      out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[2], v[3]});
+    } else {
+      out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[1], v[3]});
+      out.complex.addSimplex(std::array<std::int32_t, 3>{v[1], v[2], v[3]});
+    }
+  }
+
+  const ConnectionInput<S>& in_;
+  const Grid& grid_;
+  int n_, k_, m_, maxFaceDepth_;
+  Box<S> domain_;
+  const GeneralPosition<S> position_;
+  GraphTest<S> graphTest_;
+  std::vector<Interval<S>> jacobian_;  ///< m x n enclosure for the graph tests
+  CellTree tree_;
+  std::vector<std::array<int, 2>> fixedAxes_;  ///< the k fixed axes of each kind of m-face
+  std::vector<S> level_;                       ///< c of the current attempt
+  std::map<CellKey, RootForms> rootForms_;
+  std::vector<Bernstein<S>> patches_;  ///< the current leaf's patches
+  std::vector<S> margins_;
+  std::unordered_map<std::uint64_t, FaceResult<S>> faces_;
+  std::vector<Polygon> polygons_;
+  std::vector<S> rootPoints_;
+  // Per leaf: proven empty (-1 unknown), next to an unproven face, next to an undecided face,
+  // graph tests (-1 unknown), and the certificate's failure.
+  std::vector<std::int8_t> empty_, bandEmpty_;
+  std::vector<std::uint8_t> unproven_, stuck_, singular_;
+  std::vector<std::int8_t> graph_, faceGraph_;
+  std::vector<Failure> failure_;
+  std::vector<S> trouble_;  ///< n per leaf: where its certificate failed (setTrouble)
+  std::vector<std::uint8_t> hasTrouble_;
+  std::vector<FaceRef> unprovenFaces_;                 ///< recordUnproven
+  std::vector<std::vector<std::int32_t>> unprovenOf_;  ///< per leaf: its unproven faces
+  std::unordered_map<CellKey, std::vector<std::int32_t>> unprovenOfEmpty_;  ///< per empty cell
+  std::vector<std::vector<std::int32_t>> blocks_;  ///< the leaves of certified blocks
+  std::vector<std::int32_t> block_;                ///< per leaf: its block, or -1
+  /// Per block: its lower corner and level, and its leaves' failures before it (to dissolve
+  /// it); a dissolved block has no leaves.
+  std::vector<std::vector<std::int32_t>> blockLo_;
+  std::vector<int> blockLevel_;
+  std::vector<std::vector<CellKey>> blockEmpties_;  ///< its base cells the bounding excluded
+  std::vector<std::vector<Failure>> blockSaved_;
+  std::int64_t refined_ = 0;
+  std::size_t maxLeaves_ = 0;
+  bool refining_ = true;  ///< false: certify the base grid only (run's fallback)
+  bool budgetSpent_ = false;
+};
+
+}  // namespace
 
 template <class S>
 ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) const {
@@ -219,7 +1981,7 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
     throw InputError("connection 'crossing' supports k = 1 and k = 2, not k = " +
                      std::to_string(in.k));
   }
-  return crossing_detail::AdaptiveCrossing<S>(in, maxFaceDepth).run();
+  return AdaptiveCrossing<S>(in, maxFaceDepth).run();
 }
 
 template ConnectionOutput<double> CrossingConnection::connect(const ConnectionInput<double>&) const;
