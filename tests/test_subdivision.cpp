@@ -615,7 +615,7 @@ TEST_CASE("subdivision timings", "[.][subdivision-timing]") {
         const double seconds =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         std::printf("%-9s L=%d %-9s %-7s double: %8zu cells %10lld visited %8.3f s\n",
-                    t.manifold.name.c_str(), t.depth, bounding, subdivision, cells.size(),
+                    t.manifold.name.c_str(), t.depth, bounding.c_str(), subdivision, cells.size(),
                     static_cast<long long>(cells.visited), seconds);
       }
     }
