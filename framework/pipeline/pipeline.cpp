@@ -470,13 +470,13 @@ void imageOutputs(RunResult& result, const Problem& problem) {
 }
 
 template <class S>
-RunResult run(const Problem& problem, const Settings& settings, const Progress& progress) {
+RunResult run(const Problem& problem, const Settings& settings, const StrategyChoices& choices,
+              const Progress& progress) {
   const auto start = Clock::now();
   RunResult result;
   result.n = problem.n();
   result.k = problem.k();
   Summary& summary = result.summary;
-  const StrategyChoices choices = parseStrategies(settings);
   describeRun(summary, problem, settings, choices, ScalarTraits<S>::precisionBits());
 
   // Choose every strategy before any work, so a bad spec costs nothing.
@@ -592,7 +592,7 @@ RunResult runPipeline(const Problem& problem, const Settings& settings, const Pr
       throw InputError(o.str());
     }
   }
-  if (settings.scalar == "double") return run<double>(problem, settings, progress);
+  if (settings.scalar == "double") return run<double>(problem, settings, choices, progress);
   if (settings.scalar == "mpfr") {
     // The run's precision applies to this run only: restore the caller's afterwards.
     struct Restore {
@@ -600,7 +600,7 @@ RunResult runPipeline(const Problem& problem, const Settings& settings, const Pr
       ~Restore() { setMpfrPrecision(bits); }
     } restore;
     setMpfrPrecision(settings.precisionBits);
-    return run<Mpfr>(problem, settings, progress);
+    return run<Mpfr>(problem, settings, choices, progress);
   }
   throw InputError("unknown scalar '" + settings.scalar + "' (expected double or mpfr)");
 }
