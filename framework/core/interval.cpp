@@ -383,4 +383,52 @@ Interval<S> Interval<S>::hull(const Interval& o) const {
 template class Interval<double>;
 template class Interval<Mpfr>;
 
+// ---- Kernels with one rounding-mode switch ------------------------------------------------------
+
+Interval<double> tensorDeCasteljauEnclosure(std::span<const double> coefficients,
+                                            std::span<const int> degrees,
+                                            const Interval<double>* t) {
+  // Boost's "opposite" rounding computes every lower bound as -RU(-x op y) = RD(x op y), so
+  // under upward rounding, set once here, each bound is exactly what the per-operation
+  // switching of Interval<double> gives (the same operations in the same order).
+  using Fast =
+      boost::numeric::interval<double,
+                               bi::policies<bi::save_state_nothing<bi::rounded_arith_opp<double>>,
+                                            bi::checking_base<double>>>;
+  constexpr std::size_t kMaxAxes = 16;
+  if (degrees.size() > kMaxAxes) throw std::invalid_argument("tensorDeCasteljauEnclosure: axes");
+  double tLower[kMaxAxes], tUpper[kMaxAxes];
+  for (std::size_t a = 0; a < degrees.size(); ++a)
+    tLower[a] = t[a].lower(), tUpper[a] = t[a].upper();
+  thread_local std::vector<Fast> work;
+  work.assign(coefficients.begin(), coefficients.end());
+  double lower = 0, upper = 0;
+  {
+    const bi::save_state<bi::rounded_arith_opp<double>> upward;
+    std::size_t count = work.size();
+    for (std::size_t a = 0; a < degrees.size(); ++a) {
+      // Axis a is the fastest axis of what is left: blocks of d + 1 values, each reduced to one.
+      const Fast ta(tLower[a], tUpper[a]);
+      const int d = degrees[a];
+      const std::size_t block = static_cast<std::size_t>(d) + 1, blocks = count / block;
+      for (std::size_t b = 0; b < blocks; ++b) {
+        Fast* w = &work[b * block];
+        for (int r = 1; r <= d; ++r)
+          for (int i = 0; i + r <= d; ++i) {
+            Fast difference = w[i + 1];
+            difference -= w[i];
+            Fast step = ta;
+            step *= difference;
+            w[i] += step;
+          }
+        if (b) work[b] = w[0];
+      }
+      count = blocks;
+    }
+    lower = work[0].lower();
+    upper = work[0].upper();
+  }
+  return Interval<double>(lower, upper);
+}
+
 }  // namespace ndc

@@ -2,6 +2,7 @@
 /// Outward-rounded interval arithmetic: Boost.Interval on double, MPFI on Mpfr.
 #pragma once
 
+#include <span>
 #include <string_view>
 
 #include "framework/core/scalar.hpp"
@@ -70,5 +71,14 @@ Interval<S> operator*(Interval<S> a, const Interval<S>& b) {
 
 extern template class Interval<double>;
 extern template class Interval<Mpfr>;
+
+/// de Casteljau along every axis of a tensor-product Bernstein polynomial (double coefficients,
+/// variable 0 fastest, `degrees` per axis) at the parameter intervals `t[0..p-1]`, in interval
+/// arithmetic: the same operations, in the same order and with the same result bit for bit, as
+/// with Interval<double>, but the rounding mode is switched once per call instead of three
+/// times per operation (the switches were most of the time of a leaf's enclosure).
+Interval<double> tensorDeCasteljauEnclosure(std::span<const double> coefficients,
+                                            std::span<const int> degrees,
+                                            const Interval<double>* t);
 
 }  // namespace ndc

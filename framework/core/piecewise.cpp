@@ -129,15 +129,8 @@ Interval<S> PiecewiseBernstein::enclose(std::span<const Interval<S>> local) cons
     last[a] = pieceOf(breaks[a], local[a].upper());
     current[a] = first[a];
   }
-  // Scratch for de Casteljau: reused per thread in double (the bounding calls this per box).
-  std::vector<Interval<S>> owned;
-  thread_local std::vector<Interval<double>> reused;
-  std::vector<Interval<S>>& work = [&]() -> std::vector<Interval<S>>& {
-    if constexpr (std::is_same_v<S, double>)
-      return reused;
-    else
-      return owned;
-  }();
+  // Scratch for de Casteljau in Mpfr (double has a kernel of its own, in interval.cpp).
+  std::vector<Interval<S>> work;
   Interval<S> t[kMaxLeafAxes];
   bool any = false;
   Interval<S> result;
@@ -153,7 +146,11 @@ Interval<S> PiecewiseBernstein::enclose(std::span<const Interval<S>> local) cons
       if (i < last[a]) hi = S(breaks[a][i + 1]);
       t[a] = localParameter(Interval<S>(lo, hi), breaks[a][i], breaks[a][i + 1]);
     }
-    const Interval<S> value = tensorDeCasteljau<Interval<S>>(pieces[index], t, work);
+    Interval<S> value;
+    if constexpr (std::is_same_v<S, double>)
+      value = tensorDeCasteljauEnclosure(pieces[index].coefficients(), pieces[index].degrees(), t);
+    else
+      value = tensorDeCasteljau<Interval<S>>(pieces[index], t, work);
     result = any ? result.hull(value) : value;
     any = true;
     int a = 0;
