@@ -19,7 +19,6 @@ using ndc::Bernstein;
 using ndc::Box;
 using ndc::Expression;
 using ndc::ExpressionError;
-using ndc::ExprNode;
 using ndc::Interval;
 using ndc::Mpfr;
 using ndc::toDouble;
@@ -63,57 +62,52 @@ Mpfr exactValue(const Expression& e, const std::vector<S>& x, std::vector<Mpfr>*
   return e.evaluate<Mpfr>(p, *gradient);
 }
 
-// The value of a constant subtree (a divisor), in double.
-double constantValue(const ExprNode& n) {
-  using K = ExprNode::Kind;
-  switch (n.kind) {
-    case K::kNumber:
-      return std::stod(n.literal);
-    case K::kAdd:
-      return constantValue(*n.left) + constantValue(*n.right);
-    case K::kSub:
-      return constantValue(*n.left) - constantValue(*n.right);
-    case K::kMul:
-      return constantValue(*n.left) * constantValue(*n.right);
-    case K::kDiv:
-      return constantValue(*n.left) / constantValue(*n.right);
-    case K::kPow:
-      return std::pow(constantValue(*n.left), n.exponent);
-    case K::kNeg:
-      return -constantValue(*n.left);
-    case K::kVariable:
-    case K::kPolynomial:  // parsed expressions have no piecewise leaves
-      break;
-  }
-  throw std::logic_error("not a constant");
-}
-
 // A magnitude bound for rounding errors: the expression with every operation made
 // non-negative (a - b -> |a| + |b|, literals and variables by their absolute value) at
 // |x_j| <= bound_j. It bounds every intermediate of the plain evaluation at points of the box,
-// and every coefficient of the intermediate Bernstein forms on it.
-double magnitude(const ExprNode& n, const std::vector<double>& bound) {
-  using K = ExprNode::Kind;
-  switch (n.kind) {
-    case K::kNumber:
-      return std::abs(std::stod(n.literal));
-    case K::kVariable:
-      return bound[n.variable];
-    case K::kAdd:
-    case K::kSub:
-      return magnitude(*n.left, bound) + magnitude(*n.right, bound);
-    case K::kMul:
-      return magnitude(*n.left, bound) * magnitude(*n.right, bound);
-    case K::kDiv:
-      return magnitude(*n.left, bound) / std::abs(constantValue(*n.right));
-    case K::kPow:
-      return std::pow(magnitude(*n.left, bound), n.exponent);
-    case K::kNeg:
-      return magnitude(*n.left, bound);
-    case K::kPolynomial:  // parsed expressions have no piecewise leaves
-      break;
+// and every coefficient of the intermediate Bernstein forms on it. Computed here from the
+// tape's instructions with the literals read again (an independent reading of the program):
+// each stack entry holds the magnitude and, for constant subprograms, the value.
+double magnitude(const ndc::Tape& tape, const std::vector<double>& bound) {
+  using K = ndc::TapeOp::Kind;
+  struct Entry {
+    double magnitude, value;
+  };
+  std::vector<Entry> stack;
+  for (const ndc::TapeOp& op : tape.ops()) {
+    switch (op.kind) {
+      case K::kConstant: {
+        const double v = std::stod(tape.constants()[op.arg].literal);
+        stack.push_back({std::abs(v), v});
+        break;
+      }
+      case K::kVariable:
+        stack.push_back({bound[op.arg], 0});
+        break;
+      case K::kLeaf:
+        throw std::logic_error("parsed expressions have no piecewise leaves");
+      case K::kNeg:
+        stack.back().value = -stack.back().value;
+        break;
+      case K::kPow:
+        stack.back() = {std::pow(stack.back().magnitude, op.arg),
+                        std::pow(stack.back().value, op.arg)};
+        break;
+      default: {
+        const Entry b = stack.back();
+        stack.pop_back();
+        Entry& a = stack.back();
+        if (op.kind == K::kDiv)
+          a = {a.magnitude / std::abs(b.value), a.value / b.value};
+        else if (op.kind == K::kMul)
+          a = {a.magnitude * b.magnitude, a.value * b.value};
+        else
+          a = {a.magnitude + b.magnitude,
+               op.kind == K::kAdd ? a.value + b.value : a.value - b.value};
+      }
+    }
   }
-  return 0;
+  return stack.back().magnitude;
 }
 
 template <class S>
@@ -233,20 +227,27 @@ TEMPLATE_TEST_CASE("Expression: known values, precedence and associativity", "[e
   CHECK(std::abs(toDouble(error)) < 0.1 * eps);
 }
 
-TEST_CASE("Expression: syntax tree, text, copies", "[expression]") {
+TEST_CASE("Expression: compiled program, text, copies", "[expression]") {
+  using K = ndc::TapeOp::Kind;
   const std::vector<std::string> v = {"x", "y"};
   Expression e = Expression::parse("-x^2 + 3", v);
   CHECK(e.dim() == 2);
   CHECK(e.text() == "-x^2 + 3");
-  const ExprNode& root = e.root();
-  REQUIRE(root.kind == ExprNode::Kind::kAdd);
-  REQUIRE(root.left->kind == ExprNode::Kind::kNeg);
-  REQUIRE(root.left->left->kind == ExprNode::Kind::kPow);
-  CHECK(root.left->left->exponent == 2);
-  CHECK(root.left->left->left->kind == ExprNode::Kind::kVariable);
-  CHECK(root.left->left->left->variable == 0);
-  CHECK(root.right->kind == ExprNode::Kind::kNumber);
-  CHECK(root.right->literal == "3");
+  // Postfix: x, ^2, negate (`^` binds tighter than unary minus), 3, add.
+  const auto ops = e.tape().ops();
+  REQUIRE(ops.size() == 5);
+  CHECK((ops[0].kind == K::kVariable && ops[0].arg == 0));
+  CHECK((ops[1].kind == K::kPow && ops[1].arg == 2));
+  CHECK(ops[2].kind == K::kNeg);
+  REQUIRE(ops[3].kind == K::kConstant);
+  CHECK(e.tape().constants()[ops[3].arg].literal == "3");
+  CHECK(ops[4].kind == K::kAdd);
+  CHECK(e.tape().stackDepth() == 2);
+  // A divisor is the constant subprogram just before its instruction.
+  Expression d = Expression::parse("y/(1+1)", v);
+  REQUIRE(d.tape().ops().size() == 5);
+  CHECK((d.tape().ops()[4].kind == K::kDiv && d.tape().ops()[4].arg == 1));
+  CHECK(ndc::evaluateConstant<double>(d.tape(), 1, 4) == 2);
 
   Expression copy = e;
   Expression assigned;
@@ -255,7 +256,7 @@ TEST_CASE("Expression: syntax tree, text, copies", "[expression]") {
   Expression moved = std::move(copy);
   CHECK(moved.evaluate<double>(std::vector<double>{2, 0}) == -1);
   CHECK(assigned.evaluate<double>(std::vector<double>{2, 0}) == -1);
-  CHECK(&assigned.root() != &e.root());
+  CHECK(&assigned.tape() == &e.tape());  // copies share the immutable program
   CHECK_THROWS_AS(e.evaluate<double>(std::vector<double>{1}), std::invalid_argument);
 }
 
@@ -360,7 +361,7 @@ TEMPLATE_TEST_CASE("Expression: Bernstein form equals direct evaluation", "[expr
     for (int trial = 0; trial < 4; ++trial) {
       Box<S> box = randomBox<S>(rng, c.n);
       Bernstein<S> b = e.toBernstein(box);
-      double scale = magnitude(e.root(), boxBound(box));
+      double scale = magnitude(e.tape(), boxBound(box));
       for (int i = 0; i < 12; ++i) {
         std::vector<S> x = randomPoint(rng, box);
         S direct = e.evaluate<S>(x);
@@ -409,7 +410,7 @@ TEMPLATE_TEST_CASE("Expression: gradient against analytic and Bernstein derivati
     Expression e = Expression::parse(k.text, names(k.n));
     Box<S> box = randomBox<S>(rng, k.n);
     Bernstein<S> b = e.toBernstein(box);
-    double m = magnitude(e.root(), boxBound(box));
+    double m = magnitude(e.tape(), boxBound(box));
     std::vector<int> degrees = e.degrees();
     for (int i = 0; i < 6; ++i) {
       std::vector<S> x = randomPoint(rng, box), g(k.n);

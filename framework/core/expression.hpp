@@ -1,6 +1,6 @@
 /// \file expression.hpp
-/// Polynomial expressions (docs/contracts.md 4.1): parsing to a syntax tree and evaluation in
-/// plain, interval and Bernstein arithmetic, with or without gradients.
+/// Polynomial expressions (docs/contracts.md 4.1): parsed and compiled once to a Tape, and
+/// evaluated over it in plain, interval and Bernstein arithmetic, with or without gradients.
 #pragma once
 
 #include <memory>
@@ -16,29 +16,9 @@
 #include "framework/core/interval.hpp"
 #include "framework/core/piecewise.hpp"
 #include "framework/core/scalar.hpp"
+#include "framework/core/tape.hpp"
 
 namespace ndc {
-
-/// A node of the syntax tree.
-struct ExprNode {
-  enum class Kind { kNumber, kVariable, kAdd, kSub, kMul, kDiv, kPow, kNeg, kPolynomial };
-  Kind kind;
-  /// kNumber: the decimal text, kept so Mpfr parses it exactly; empty when the number is the
-  /// double `value` exactly (numbers built by Expression::constant)
-  std::string literal;
-  double value = 0;  ///< kNumber: the literal rounded to the nearest double (cached)
-  double enclosureLo = 0, enclosureHi = 0;  ///< kNumber: a double interval holding the literal
-  int variable = -1;                        ///< kVariable: index into the variable list
-  int exponent = 0;                         ///< kPow: the non-negative integer exponent
-  std::unique_ptr<ExprNode> left, right;    ///< operands (kNeg and kPow use left only)
-  /// kPolynomial: the piecewise Bernstein leaf, and its partial derivative along each local
-  /// axis (for gradients)
-  std::shared_ptr<const PiecewiseBernstein> polynomial;
-  std::vector<std::shared_ptr<const PiecewiseBernstein>> partials;
-  /// kPolynomial: number of the leaf among the tree's distinct leaves (evaluations compute
-  /// each distinct leaf once)
-  int leafIndex = -1;
-};
 
 /// A parsed polynomial expression in the variables `x_0..x_{n-1}`.
 ///
@@ -48,12 +28,8 @@ struct ExprNode {
 /// is an ExpressionError.
 class Expression {
  public:
+  /// The constant 0 in zero variables.
   Expression();
-  Expression(const Expression&);
-  Expression(Expression&&) noexcept;
-  Expression& operator=(const Expression&);
-  Expression& operator=(Expression&&) noexcept;
-  ~Expression();
 
   /// Parses `text` with the given variable names; throws ExpressionError.
   static Expression parse(std::string_view text, std::span<const std::string> variables);
@@ -82,8 +58,10 @@ class Expression {
   int dim() const { return dim_; }
   /// The source text.
   const std::string& text() const { return text_; }
-  const ExprNode& root() const { return *root_; }
-  /// Degree in each variable (an upper bound from the syntax tree: cancellation is ignored).
+  /// The compiled program (shared by copies; midrad.hpp and magnitude.hpp evaluate it too).
+  const Tape& tape() const { return *tape_; }
+  const std::shared_ptr<const Tape>& sharedTape() const { return tape_; }
+  /// Degree in each variable (an upper bound from the program: cancellation is ignored).
   std::vector<int> degrees() const;
 
   /// Value at a point.
@@ -104,14 +82,12 @@ class Expression {
   Bernstein<S> toBernstein(const Box<S>& domain) const;
 
  private:
-  /// A node of `kind` over copies of `a` and (for binary kinds) `*b`.
-  static Expression join(ExprNode::Kind kind, const char* op, const Expression& a,
+  /// The program of `a`, then of `*b` (for binary kinds), then `kind`.
+  static Expression join(TapeOp::Kind kind, const char* op, const Expression& a,
                          const Expression* b);
   int dim_ = 0;
-  int slots_ = 1;   ///< evaluation slots the gradient evaluator needs: tree height + 1
-  int leaves_ = 0;  ///< distinct piecewise leaves in the tree
   std::string text_;
-  std::unique_ptr<ExprNode> root_;
+  std::shared_ptr<const Tape> tape_;
 };
 
 }  // namespace ndc

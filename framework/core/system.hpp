@@ -11,8 +11,8 @@
 
 namespace ndc {
 
-/// The m constraints in n variables of a problem, in scalar S, evaluated directly from the
-/// syntax trees (not from the Bernstein form, so Newton sees the exact polynomials).
+/// The m constraints in n variables of a problem, in scalar S, evaluated directly from their
+/// compiled programs (Tape) (not from the Bernstein form, so Newton sees the exact polynomials).
 template <class S>
 class System {
  public:

@@ -127,115 +127,6 @@ bool IntervalBounding<S>::mayContainZero(const State& state) const {
 
 // --- LinearizedBounding --------------------------------------------------------------------------
 
-namespace {
-
-// Total degree of a syntax tree, saturated at 2: only "at most 1" (affine) matters here.
-int totalDegree(const ExprNode& node) {
-  using K = ExprNode::Kind;
-  switch (node.kind) {
-    case K::kNumber:
-      return 0;
-    case K::kVariable:
-      return 1;
-    case K::kAdd:
-    case K::kSub:
-      return std::max(totalDegree(*node.left), totalDegree(*node.right));
-    case K::kMul:
-      return std::min(2, totalDegree(*node.left) + totalDegree(*node.right));
-    case K::kDiv:  // the divisor is a constant
-    case K::kNeg:
-      return totalDegree(*node.left);
-    case K::kPolynomial: {
-      int d = 0;
-      for (int a = 0; a < node.polynomial->dim(); ++a) d += node.polynomial->degree(a);
-      return std::min(d, 2);
-    }
-    case K::kPow: {
-      const int d = totalDegree(*node.left);
-      return node.exponent == 0 || d == 0 ? 0 : (node.exponent == 1 ? d : 2);
-    }
-  }
-  return 2;
-}
-
-// Midpoint-radius products and sums: z = x * y and z = x + s y (s = +-1), each with the
-// rounding of its midpoint (u |z| bounds it, u >= 2 x unit round-off) and of its radius (the
-// factor up = 1 + 8 u) absorbed in the radius. Underflow is ignored.
-template <class S>
-void mulMidRad(const S& xm, const S& xr, const S& ym, const S& yr, const S& u, const S& up, S& zm,
-               S& zr) {
-  using std::abs;
-  S m = xm * ym;
-  S r = (abs(xm) * yr + xr * abs(ym) + xr * yr + u * abs(m)) * up;
-  zm = std::move(m);
-  zr = std::move(r);
-}
-
-template <class S>
-void addMidRad(S& xm, S& xr, const S& ym, const S& yr, bool subtract, const S& u, const S& up) {
-  using std::abs;
-  if (subtract)
-    xm -= ym;
-  else
-    xm += ym;
-  xr = (xr + yr + u * abs(xm)) * up;
-}
-
-template <class S>
-bool isZero(const S& m, const S& r) {
-  return m == 0 && r == 0;
-}
-
-}  // namespace
-
-template <class S>
-void LinearizedBounding<S>::compile(const ExprNode& node, std::vector<Op>& tape, int depth,
-                                    int& maxDepth) {
-  // Postfix order: an operand occupies stack slot `depth`, a right operand `depth + 1`.
-  using K = ExprNode::Kind;
-  maxDepth = std::max(maxDepth, depth + 1);
-  Op op{Op::kConst, 0, S(0), S(0)};
-  switch (node.kind) {
-    case K::kPolynomial:
-      op.kind = Op::kLeaf;
-      op.leaf = &node;
-      break;
-    case K::kNumber: {
-      const Interval<S> literal =
-          node.literal.empty() ? Interval<S>(S(node.value)) : Interval<S>::fromString(node.literal);
-      op.mid = literal.midpoint();
-      op.rad = std::max(literal.upper() - op.mid, op.mid - literal.lower()) *
-               (S(1) + 8 * ScalarTraits<S>::epsilon());
-      break;
-    }
-    case K::kVariable:
-      op.kind = Op::kVar;
-      op.arg = node.variable;
-      break;
-    case K::kAdd:
-    case K::kSub:
-    case K::kMul:
-    case K::kDiv:
-      compile(*node.left, tape, depth, maxDepth);
-      compile(*node.right, tape, depth + 1, maxDepth);
-      op.kind = node.kind == K::kAdd   ? Op::kAdd
-                : node.kind == K::kSub ? Op::kSub
-                : node.kind == K::kMul ? Op::kMul
-                                       : Op::kDiv;
-      break;
-    case K::kPow:
-      compile(*node.left, tape, depth, maxDepth);
-      op.kind = Op::kPow;
-      op.arg = node.exponent;
-      break;
-    case K::kNeg:
-      compile(*node.left, tape, depth, maxDepth);
-      op.kind = Op::kNeg;
-      break;
-  }
-  tape.push_back(std::move(op));
-}
-
 template <class S>
 LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& domain)
     : bernstein_(problem, domain), n_(problem.n()), m_(static_cast<int>(problem.equations.size())) {
@@ -254,18 +145,7 @@ LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& 
   // 8 (n + m + 8) eps >= 2 gamma_p for every dot product length p used below (eps = 2u).
   u_ = ScalarTraits<S>::epsilon();
   tol_ = S(8 * (n_ + m_ + 8)) * u_;
-  int depth = 1;
-  tapes_.resize(m);
-  for (std::size_t i = 0; i < m; ++i) compile(problem.equations[i].root(), tapes_[i], 0, depth);
-  stackMid_.assign(static_cast<std::size_t>(depth) * (n + 1), S(0));
-  int leaves = 0;
-  for (const auto& tape : tapes_)
-    for (const Op& op : tape)
-      if (op.kind == Op::kLeaf) leaves = std::max(leaves, op.leaf->leafIndex + 1);
-  leafMid_.assign(static_cast<std::size_t>(leaves) * (n + 1), S(0));
-  leafRad_.assign(static_cast<std::size_t>(leaves) * (n + 1), S(0));
-  leafDone_.assign(static_cast<std::size_t>(leaves), 0);
-  stackRad_.assign(static_cast<std::size_t>(depth) * (n + 1), S(0));
+  for (const Expression& e : problem.equations) evaluators_.emplace_back(e.sharedTape());
   c_.resize(n);
   h_.resize(n);
   zero_.assign(n, S(0));
@@ -293,7 +173,7 @@ LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& 
   std::vector<Interval<S>> box(n), gradient(n);
   for (std::size_t j = 0; j < n; ++j) box[j] = Interval<S>(domain.lo[j], domain.hi[j]);
   for (std::size_t i = 0; i < m; ++i) {
-    if (totalDegree(problem.equations[i].root()) > 1) continue;
+    if (problem.equations[i].tape().totalDegree(2) > 1) continue;
     affine_[i] = 1;
     problem.equations[i].evaluate<S>(std::span<const Interval<S>>(box),
                                      std::span<Interval<S>>(gradient));
@@ -304,133 +184,6 @@ LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& 
           std::max(gradient[j].upper() - mid, mid - gradient[j].lower()) * (S(1) + tol_);
     }
   }
-}
-
-template <class S>
-bool LinearizedBounding<S>::run(const std::vector<Op>& tape, std::span<const S> radius,
-                                bool gradient) const {
-  using std::abs;
-  using std::isfinite;
-  const std::size_t stride = gradient ? static_cast<std::size_t>(n_) + 1 : 1;
-  const S& u = u_;
-  const S up = S(1) + 8 * u;
-  S tm, tr, sm, sr, fm, fr;  // temporaries of the products
-  std::size_t top = 0;       // number of occupied slots
-  std::fill(leafDone_.begin(), leafDone_.end(), 0);
-  for (const Op& op : tape) {
-    if (op.kind == Op::kConst || op.kind == Op::kVar || op.kind == Op::kLeaf) {
-      S* m = &stackMid_[top * stride];
-      S* r = &stackRad_[top * stride];
-      ++top;
-      for (std::size_t q = 1; q < stride; ++q) m[q] = r[q] = 0;
-      if (op.kind == Op::kLeaf) {
-        // Interval enclosures of the leaf and its partials over the box, as midpoint-radius,
-        // once per distinct leaf and run.
-        const auto slot = static_cast<std::size_t>(op.leaf->leafIndex);
-        S* memoMid = &leafMid_[slot * stride];
-        S* memoRad = &leafRad_[slot * stride];
-        if (leafDone_[slot]) {
-          for (std::size_t q = 0; q < stride; ++q) m[q] = memoMid[q], r[q] = memoRad[q];
-          continue;
-        }
-        const PiecewiseBernstein& leaf = *op.leaf->polynomial;
-        Interval<S> local[8];
-        for (int a = 0; a < leaf.dim(); ++a) {
-          const int j = leaf.axes[a];
-          local[a] = Interval<S>(c_[j] - radius[j], c_[j] + radius[j]);
-        }
-        const std::span<const Interval<S>> span(local, static_cast<std::size_t>(leaf.dim()));
-        const auto assign = [&](const Interval<S>& v, S& mid, S& rad) {
-          mid = v.midpoint();
-          rad = std::max(v.upper() - mid, mid - v.lower()) * up;
-        };
-        assign(leaf.enclose<S>(span), m[0], r[0]);
-        if (gradient)
-          for (int a = 0; a < leaf.dim(); ++a)
-            assign(op.leaf->partials[a]->template enclose<S>(span), m[leaf.axes[a] + 1],
-                   r[leaf.axes[a] + 1]);
-        for (std::size_t q = 0; q < stride; ++q) memoMid[q] = m[q], memoRad[q] = r[q];
-        leafDone_[slot] = 1;
-      } else if (op.kind == Op::kConst) {
-        m[0] = op.mid;
-        r[0] = op.rad;
-      } else {
-        m[0] = c_[op.arg];
-        r[0] = radius[op.arg];
-        if (gradient) m[op.arg + 1] = 1;
-      }
-      continue;
-    }
-    // Unary operators act on the top slot, binary ones on the two top slots (x below y).
-    if (op.kind != Op::kPow && op.kind != Op::kNeg) --top;
-    S* xm = &stackMid_[(top - 1) * stride];
-    S* xr = &stackRad_[(top - 1) * stride];
-    const S* ym = xm + stride;
-    const S* yr = xr + stride;
-    switch (op.kind) {
-      case Op::kAdd:
-      case Op::kSub:
-        for (std::size_t q = 0; q < stride; ++q)
-          if (!isZero(ym[q], yr[q]))
-            addMidRad(xm[q], xr[q], ym[q], yr[q], op.kind == Op::kSub, u, up);
-        break;
-      case Op::kMul:
-        // Product rule (xy)' = x' y + x y', then the value.
-        for (std::size_t q = 1; q < stride; ++q) {
-          const bool zx = isZero(xm[q], xr[q]), zy = isZero(ym[q], yr[q]);
-          if (zx && zy) continue;
-          mulMidRad(xm[0], xr[0], ym[q], yr[q], u, up, sm, sr);
-          if (zx) {
-            xm[q] = sm;
-            xr[q] = sr;
-            continue;
-          }
-          mulMidRad(xm[q], xr[q], ym[0], yr[0], u, up, xm[q], xr[q]);
-          if (!zy) addMidRad(xm[q], xr[q], sm, sr, false, u, up);
-        }
-        mulMidRad(xm[0], xr[0], ym[0], yr[0], u, up, xm[0], xr[0]);
-        break;
-      case Op::kDiv: {
-        // The divisor is a constant: multiply by an enclosure of its reciprocal.
-        const S mag = abs(ym[0]);
-        const S gap = mag - yr[0];
-        if (!(gap > 2 * u * mag)) return false;
-        fm = S(1) / ym[0];
-        fr = (yr[0] / (mag * gap) + u * abs(fm)) * up;
-        for (std::size_t q = 0; q < stride; ++q)
-          if (!isZero(xm[q], xr[q])) mulMidRad(xm[q], xr[q], fm, fr, u, up, xm[q], xr[q]);
-        break;
-      }
-      case Op::kPow: {
-        // x^p = x^(p-1) x by binary powering, and (x^p)' = p x^(p-1) x'.
-        if (op.arg == 0) {
-          xm[0] = 1;
-          xr[0] = 0;
-          for (std::size_t q = 1; q < stride; ++q) xm[q] = xr[q] = 0;
-          break;
-        }
-        tm = 1;
-        tr = 0;
-        sm = xm[0];
-        sr = xr[0];
-        for (int e = op.arg - 1; e > 0; e >>= 1) {
-          if (e & 1) mulMidRad(tm, tr, sm, sr, u, up, tm, tr);
-          if (e > 1) mulMidRad(sm, sr, sm, sr, u, up, sm, sr);
-        }
-        mulMidRad(S(op.arg), S(0), tm, tr, u, up, fm, fr);
-        for (std::size_t q = 1; q < stride; ++q)
-          if (!isZero(xm[q], xr[q])) mulMidRad(fm, fr, xm[q], xr[q], u, up, xm[q], xr[q]);
-        mulMidRad(tm, tr, xm[0], xr[0], u, up, xm[0], xr[0]);
-        break;
-      }
-      case Op::kNeg:
-        for (std::size_t q = 0; q < stride; ++q) xm[q] = -xm[q];
-        break;
-      default:
-        break;
-    }
-  }
-  return isfinite(stackMid_[0]) && isfinite(stackRad_[0]);
 }
 
 template <class S>
@@ -495,15 +248,15 @@ bool LinearizedBounding<S>::linearise() const {
         r += affineRad_[at(i, j, n)] * h_[j];
       }
     } else {
-      if (!run(tapes_[i], h_, true)) return false;
+      if (!evaluators_[i].run(c_, h_, true)) return false;
       for (int j = 0; j < n; ++j) {
-        jac[j] = stackMid_[static_cast<std::size_t>(j) + 1];
-        r += stackRad_[static_cast<std::size_t>(j) + 1] * h_[j];
+        jac[j] = evaluators_[i].mid(j + 1);
+        r += evaluators_[i].rad(j + 1) * h_[j];
       }
     }
-    if (!run(tapes_[i], zero_, false)) return false;
-    mu_[i] = stackMid_[0];
-    rho_[i] = (stackRad_[0] + r * up) * up;
+    if (!evaluators_[i].run(c_, zero_, false)) return false;
+    mu_[i] = evaluators_[i].mid(0);
+    rho_[i] = (evaluators_[i].rad(0) + r * up) * up;
     if (!isfinite(rho_[i])) return false;
   }
   return true;

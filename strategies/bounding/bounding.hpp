@@ -13,6 +13,7 @@
 #include "framework/core/box.hpp"
 #include "framework/core/expression.hpp"
 #include "framework/core/interval.hpp"
+#include "framework/core/midrad.hpp"
 #include "framework/core/problem.hpp"
 #include "framework/core/registry.hpp"
 #include "framework/core/scalar.hpp"
@@ -62,7 +63,7 @@ class BernsteinBounding final {
 /// the box is kept iff the intersection of both enclosures contains 0 for every F_i. Unlike the
 /// Bernstein test it is rigorous: rounding never discards a box that holds a zero.
 ///
-/// Evaluation works on the syntax trees directly (no Bernstein form), so the per-box state is
+/// Evaluation works on the compiled programs directly (no Bernstein form), so the per-box state is
 /// the box alone. An instance keeps scratch buffers: use one instance per thread.
 template <class S>
 class IntervalBounding final {
@@ -98,7 +99,7 @@ class IntervalBounding final {
 /// from M; the simultaneous test removes most of these.
 ///
 /// Derivation. Let X be the box, c its centre, h_j >= |x_j - c_j| on X, J(X) an interval
-/// enclosure of the Jacobian over X (midpoint-radius gradients of the syntax trees; constant
+/// enclosure of the Jacobian over X (midpoint-radius gradients of the equations' tapes; constant
 /// rows for affine equations) and J_c any point matrix (the midpoint of J(X)). By the
 /// mean value theorem, applied to each F_i, every zero x = c + d in X satisfies
 ///
@@ -120,11 +121,11 @@ class IntervalBounding final {
 /// never discards a box that holds a common zero. A rank-deficient J_c (a pivot below 1e-10
 /// of the largest row) skips the test and keeps the box.
 ///
-/// F(c) and J(X) come from the equations compiled once to postfix form and evaluated in
-/// midpoint-radius arithmetic (rounding-to-nearest, every rounding error added to the radius):
-/// as rigorous as outward-rounded intervals, without switching rounding modes per operation.
-/// The test is only enabled when it can pay: m <= n and some two equations share a variable
-/// (for equations in disjoint variables, like the Clifford torus, the per-equation tests
+/// F(c) and J(X) come from the equations' tapes evaluated in midpoint-radius arithmetic
+/// (MidRadEvaluator, framework/core/midrad.hpp) (rounding-to-nearest, every rounding error added to
+/// the radius): as rigorous as outward-rounded intervals, without switching rounding modes per
+/// operation. The test is only enabled when it can pay: m <= n and some two equations share a
+/// variable (for equations in disjoint variables, like the Clifford torus, the per-equation tests
 /// already decide the system, and `linearized` is `bernstein`). Scratch buffers make
 /// mayContainZero allocation-free for double: use one instance per thread.
 template <class S>
@@ -133,8 +134,8 @@ class LinearizedBounding final {
   /// Per-box state: the Bernstein state (box and patches), carried down by halving.
   using State = typename BernsteinBounding<S>::State;
 
-  /// Converts the equations to Bernstein form on `domain` (as BernsteinBounding) and compiles
-  /// them to postfix form for the linearised test.
+  /// Converts the equations to Bernstein form on `domain` (as BernsteinBounding) and prepares
+  /// their midpoint-radius evaluators for the linearised test.
   LinearizedBounding(const Problem& problem, const Box<S>& domain);
 
   /// Number of variables n.
@@ -154,19 +155,6 @@ class LinearizedBounding final {
   bool linearizationExcludes(const Box<S>& box) const;
 
  private:
-  /// One instruction of an equation compiled to postfix form (evaluated on a stack).
-  struct Op {
-    enum Kind { kConst, kVar, kAdd, kSub, kMul, kDiv, kPow, kNeg, kLeaf } kind;
-    int arg = 0;                     ///< kVar: variable index; kPow: exponent
-    S mid, rad;                      ///< kConst: the literal as midpoint and radius
-    const ExprNode* leaf = nullptr;  ///< kLeaf: the piecewise Bernstein leaf node
-  };
-  static void compile(const ExprNode& node, std::vector<Op>& tape, int depth, int& maxDepth);
-  /// Runs `tape` in midpoint-radius arithmetic with every rounding absorbed in the radii;
-  /// variable j is mid c_j, radius `radius[j]`. With `gradient`, slot 0 of the stack ends with
-  /// the value and the n partial derivatives, else with the value only. False when a divisor
-  /// encloses 0 or a value is not finite.
-  bool run(const std::vector<Op>& tape, std::span<const S> radius, bool gradient) const;
   // The steps of linearizationExcludes (numbered as in the class comment), on the scratch
   // buffers below.
   /// 1: centre c_ and half-widths h_ of `box`; returns |h|_2^2 (rounded up).
@@ -196,13 +184,8 @@ class LinearizedBounding final {
               static_cast<std::size_t>(row)];
   }
   const S& nul(int row, int col) const { return q1(row, m_ + col); }
-  // Per run: the enclosures of each distinct leaf (dim + 1 midpoints and radii per leaf), and
-  // whether they are computed yet (built expressions use the same leaves many times).
-  mutable std::vector<S> leafMid_, leafRad_;
-  mutable std::vector<unsigned char> leafDone_;
-
   BernsteinBounding<S> bernstein_;
-  std::vector<std::vector<Op>> tapes_;  // per equation
+  std::vector<MidRadEvaluator<S>> evaluators_;  // per equation
   std::vector<char> affine_;  // per equation: total degree <= 1, so the gradient is constant
   int n_ = 0, m_ = 0;
   bool enabled_ = false;  // some pair of equations shares a variable, and m <= n
@@ -210,7 +193,6 @@ class LinearizedBounding final {
   S u_;                   // unit of the midpoint-radius arithmetic (>= 2 x unit round-off)
   std::vector<S> affineMid_, affineRad_;  // m x n: constant gradients (affine rows only)
   // Scratch of linearizationExcludes, sized once (matrices row-major unless noted).
-  mutable std::vector<S> stackMid_, stackRad_;            // evaluation stack, (n + 1) per slot
   mutable std::vector<S> c_, h_, zero_, jac_, mu_, rho_;  // jac_: m x n
   mutable std::vector<S> w_, beta_, diag_;           // w_: J_c^T (n x m, column-major), reflectors
   mutable std::vector<S> q_;                         // n x n orthogonal factor, column-major

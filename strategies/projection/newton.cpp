@@ -28,149 +28,12 @@ S normInf(std::span<const S> x) {
   return worst;
 }
 
-/// Value of a constant subtree (the divisor of a kDiv node).
-template <class S>
-S constantValue(const ExprNode& node) {
-  switch (node.kind) {
-    case ExprNode::Kind::kNumber:
-      return node.literal.empty() ? S(node.value) : ScalarTraits<S>::fromString(node.literal);
-    case ExprNode::Kind::kAdd:
-      return constantValue<S>(*node.left) + constantValue<S>(*node.right);
-    case ExprNode::Kind::kSub:
-      return constantValue<S>(*node.left) - constantValue<S>(*node.right);
-    case ExprNode::Kind::kMul:
-      return constantValue<S>(*node.left) * constantValue<S>(*node.right);
-    case ExprNode::Kind::kDiv:
-      return constantValue<S>(*node.left) / constantValue<S>(*node.right);
-    case ExprNode::Kind::kNeg:
-      return -constantValue<S>(*node.left);
-    case ExprNode::Kind::kPow: {
-      S base = constantValue<S>(*node.left), result = 1;
-      for (int e = 0; e < node.exponent; ++e) result *= base;
-      return result;
-    }
-    case ExprNode::Kind::kVariable:
-    case ExprNode::Kind::kPolynomial:
-      break;
-  }
-  throw std::logic_error("newton: division by a non-constant expression");
-}
-
 }  // namespace
-
-/// Translates a syntax tree into the postfix program of `|F|(|x|)`; returns the total degree
-/// and adds the operation count to `ops`.
-template <class S, class Op>
-static int compileMagnitude(const ExprNode& node, std::vector<Op>& program,
-                            std::vector<S>& constants, int& ops) {
-  using std::abs;
-  using Kind = ExprNode::Kind;
-  switch (node.kind) {
-    case Kind::kNumber:
-      // A decimal literal is rounded once when it is read.
-      ++ops;
-      constants.push_back(
-          abs(node.literal.empty() ? S(node.value) : ScalarTraits<S>::fromString(node.literal)));
-      program.push_back({Op::Kind::kConstant, static_cast<int>(constants.size()) - 1});
-      return 0;
-    case Kind::kVariable:
-      program.push_back({Op::Kind::kVariable, node.variable});
-      return 1;
-    case Kind::kPolynomial: {
-      // |leaf| <= its largest |coefficient| near its pieces; de Casteljau rounds once per step.
-      const PiecewiseBernstein& leaf = *node.polynomial;
-      for (int a = 0; a < leaf.dim(); ++a) ops += leaf.degree(a) * (leaf.degree(a) + 1);
-      constants.push_back(S(leaf.maxAbsCoefficient()));
-      program.push_back({Op::Kind::kConstant, static_cast<int>(constants.size()) - 1});
-      return 0;
-    }
-    case Kind::kNeg:
-      // Negation is exact and does not change magnitudes.
-      return compileMagnitude<S>(*node.left, program, constants, ops);
-    case Kind::kAdd:
-    case Kind::kSub: {
-      // |a - b| <= |a| + |b|: the magnitude bound adds both terms.
-      ++ops;
-      const int a = compileMagnitude<S>(*node.left, program, constants, ops);
-      const int b = compileMagnitude<S>(*node.right, program, constants, ops);
-      program.push_back({Op::Kind::kAdd, 0});
-      return std::max(a, b);
-    }
-    case Kind::kMul: {
-      ++ops;
-      const int a = compileMagnitude<S>(*node.left, program, constants, ops);
-      const int b = compileMagnitude<S>(*node.right, program, constants, ops);
-      program.push_back({Op::Kind::kMul, 0});
-      return a + b;
-    }
-    case Kind::kDiv: {
-      // The divisor is constant (grammar): divide by its actual magnitude, not its bound.
-      ops += 2;
-      const int a = compileMagnitude<S>(*node.left, program, constants, ops);
-      constants.push_back(abs(constantValue<S>(*node.right)));
-      program.push_back({Op::Kind::kDiv, static_cast<int>(constants.size()) - 1});
-      return a;
-    }
-    case Kind::kPow: {
-      // A naive product of e factors: e - 1 roundings at most.
-      ops += std::max(node.exponent - 1, 0);
-      const int a = compileMagnitude<S>(*node.left, program, constants, ops);
-      program.push_back({Op::Kind::kPow, node.exponent});
-      return a * node.exponent;
-    }
-  }
-  return 0;
-}
 
 template <class S>
 NewtonProjection<S>::NewtonProjection(const System<S>& system, int maxIterations)
     : system_(&system), maxIterations_(maxIterations) {
-  for (const Expression& e : system.equations()) {
-    MagnitudeProgram program;
-    int ops = 0;
-    const int degree = compileMagnitude<S>(e.root(), program.ops, constants_, ops);
-    program.count = ops + degree;
-    programs_.push_back(std::move(program));
-  }
-}
-
-template <class S>
-S NewtonProjection<S>::magnitude(const MagnitudeProgram& program, std::span<const S> absX,
-                                 std::vector<S>& stack) const {
-  using Kind = typename MagnitudeOp::Kind;
-  stack.clear();
-  for (const MagnitudeOp& op : program.ops) {
-    switch (op.kind) {
-      case Kind::kConstant:
-        stack.push_back(constants_[op.argument]);
-        break;
-      case Kind::kVariable:
-        stack.push_back(absX[op.argument]);
-        break;
-      case Kind::kAdd: {
-        S b = std::move(stack.back());
-        stack.pop_back();
-        stack.back() += b;
-        break;
-      }
-      case Kind::kMul: {
-        S b = std::move(stack.back());
-        stack.pop_back();
-        stack.back() *= b;
-        break;
-      }
-      case Kind::kDiv:
-        stack.back() /= constants_[op.argument];
-        break;
-      case Kind::kPow: {
-        S base = stack.back(), result = 1;
-        for (int e = 0; e < op.argument; ++e) result *= base;
-        stack.back() = result;
-        break;
-      }
-    }
-  }
-  return stack.back();
+  for (const Expression& e : system.equations()) magnitudes_.emplace_back(e.sharedTape());
 }
 
 template <class S>
@@ -179,9 +42,9 @@ void NewtonProjection<S>::residualTolerance(std::span<const S> x, std::span<S> t
   std::vector<S> absX(x.size()), stack;
   for (std::size_t j = 0; j < x.size(); ++j) absX[j] = abs(x[j]);
   const S eps = ScalarTraits<S>::epsilon();
-  for (std::size_t i = 0; i < programs_.size(); ++i) {
+  for (std::size_t i = 0; i < magnitudes_.size(); ++i) {
     // tol_i = 2 (ops_i + deg_i) eps |F_i|(|x|): see the header.
-    tol[i] = S(2 * programs_[i].count) * eps * magnitude(programs_[i], absX, stack);
+    tol[i] = S(2 * magnitudes_[i].count()) * eps * magnitudes_[i](absX, stack);
   }
 }
 

@@ -15,6 +15,7 @@
 #include "framework/core/box.hpp"
 #include "framework/core/complex.hpp"
 #include "framework/core/grid.hpp"
+#include "framework/core/magnitude.hpp"
 #include "framework/core/registry.hpp"
 #include "framework/core/scalar.hpp"
 #include "framework/core/strategy.hpp"
@@ -30,13 +31,13 @@ namespace ndc {
 /// not converged.
 ///
 /// **Convergence criterion** (backward error at the working precision). For each equation
-/// `F_i`, let `|F_i|(|x|)` be its syntax tree evaluated with every constant and variable
+/// `F_i`, let `|F_i|(|x|)` be its program evaluated with every constant and variable
 /// replaced by its absolute value and every subtraction by an addition: it bounds the sum of
 /// the magnitudes of all the terms the evaluation of `F_i(x)` combines. A standard
 /// running-error argument gives `|fl(F_i(x)) - F_i(x)| <= ops_i * eps * |F_i|(|x|)` to first
 /// order, and rounding x itself to the working precision moves `F_i` by at most
 /// `deg_i * eps * |F_i|(|x|)` (Euler's identity for polynomials with non-negative
-/// coefficients), where `ops_i` is the operation count of the tree and `deg_i` its total
+/// coefficients), where `ops_i` is the operation count of the program and `deg_i` its total
 /// degree. So no iterate can be told apart from a zero once
 ///
 ///     |F_i(x)| <= tol_i(x) + 2 eps |x|_inf |grad F_i(x)|_1,
@@ -72,23 +73,9 @@ class NewtonProjection final {
   int maxIterations() const { return maxIterations_; }
 
  private:
-  /// One instruction of the postfix program that evaluates `|F_i|(|x|)`.
-  struct MagnitudeOp {
-    enum class Kind : std::uint8_t { kConstant, kVariable, kAdd, kMul, kDiv, kPow };
-    Kind kind;
-    int argument = 0;  ///< kConstant: index into constants_; kVariable: variable; kPow: exponent
-  };
-  struct MagnitudeProgram {
-    std::vector<MagnitudeOp> ops;
-    int count = 0;  ///< ops_i + deg_i
-  };
-  S magnitude(const MagnitudeProgram& program, std::span<const S> absX,
-              std::vector<S>& stack) const;
-
   const System<S>* system_;
   int maxIterations_;
-  std::vector<S> constants_;  ///< |literal| of every number of every equation
-  std::vector<MagnitudeProgram> programs_;
+  std::vector<MagnitudeBound<S>> magnitudes_;  ///< |F_i|(|x|) per equation
 };
 
 extern template class NewtonProjection<double>;

@@ -1,0 +1,219 @@
+// Midpoint-radius evaluation of a Tape (see midrad.hpp).
+#include "framework/core/midrad.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ndc {
+
+namespace {
+
+using K = TapeOp::Kind;
+
+// Midpoint-radius products and sums: z = x * y and z = x + s y (s = +-1), each with the
+// rounding of its midpoint (u |z| bounds it, u >= 2 x unit round-off) and of its radius (the
+// factor up = 1 + 8 u) absorbed in the radius.
+template <class S>
+void mulMidRad(const S& xm, const S& xr, const S& ym, const S& yr, const S& u, const S& up, S& zm,
+               S& zr) {
+  using std::abs;
+  S m = xm * ym;
+  S r = (abs(xm) * yr + xr * abs(ym) + xr * yr + u * abs(m)) * up;
+  zm = std::move(m);
+  zr = std::move(r);
+}
+
+template <class S>
+void addMidRad(S& xm, S& xr, const S& ym, const S& yr, bool subtract, const S& u, const S& up) {
+  using std::abs;
+  if (subtract)
+    xm -= ym;
+  else
+    xm += ym;
+  xr = (xr + yr + u * abs(xm)) * up;
+}
+
+template <class S>
+bool isZero(const S& m, const S& r) {
+  return m == 0 && r == 0;
+}
+
+/// Midpoint and radius of an interval, the radius rounded up by the factor `up`.
+template <class S>
+void toMidRad(const Interval<S>& v, const S& up, S& mid, S& rad) {
+  mid = v.midpoint();
+  rad = std::max(v.upper() - mid, mid - v.lower()) * up;
+}
+
+}  // namespace
+
+template <class S>
+MidRadEvaluator<S>::MidRadEvaluator(std::shared_ptr<const Tape> tape)
+    : tape_(std::move(tape)), u_(ScalarTraits<S>::epsilon()), up_(S(1) + 8 * u_) {
+  for (const TapeConstant& c : tape_->constants()) {
+    constMid_.emplace_back();
+    constRad_.emplace_back();
+    toMidRad(c.enclosure<S>(), up_, constMid_.back(), constRad_.back());
+  }
+  const auto stride = static_cast<std::size_t>(tape_->dim()) + 1;
+  stackMid_.assign(static_cast<std::size_t>(tape_->stackDepth()) * stride, S(0));
+  stackRad_ = stackMid_;
+  leafMid_.assign(tape_->leaves().size() * stride, S(0));
+  leafRad_ = leafMid_;
+  leafDone_.assign(tape_->leaves().size(), 0);
+}
+
+template <class S>
+bool MidRadEvaluator<S>::run(std::span<const S> centre, std::span<const S> radius,
+                             bool gradient) const {
+  using std::isfinite;
+  stride_ = gradient ? static_cast<std::size_t>(tape_->dim()) + 1 : 1;
+  centre_ = centre;
+  radius_ = radius;
+  std::fill(leafDone_.begin(), leafDone_.end(), 0);
+  std::size_t top = 0;  // number of occupied slots
+  for (const TapeOp& op : tape_->ops()) {
+    if (op.kind == K::kConstant || op.kind == K::kVariable || op.kind == K::kLeaf) {
+      pushOperand(op, &stackMid_[top * stride_], &stackRad_[top * stride_]);
+      ++top;
+      continue;
+    }
+    // Unary instructions act on the top slot, binary ones on the two top slots (x below y).
+    if (op.kind != K::kPow && op.kind != K::kNeg) --top;
+    S* xm = &stackMid_[(top - 1) * stride_];
+    S* xr = &stackRad_[(top - 1) * stride_];
+    if (!apply(op, xm, xr, xm + stride_, xr + stride_)) return false;
+  }
+  return isfinite(stackMid_[0]) && isfinite(stackRad_[0]);
+}
+
+template <class S>
+void MidRadEvaluator<S>::pushOperand(const TapeOp& op, S* m, S* r) const {
+  const auto arg = static_cast<std::size_t>(op.arg);
+  for (std::size_t q = 1; q < stride_; ++q) m[q] = r[q] = 0;
+  switch (op.kind) {
+    case K::kLeaf:
+      leafEnclosure(arg, m, r);
+      break;
+    case K::kConstant:
+      m[0] = constMid_[arg];
+      r[0] = constRad_[arg];
+      break;
+    default:  // a variable
+      m[0] = centre_[arg];
+      r[0] = radius_[arg];
+      if (stride_ > 1) m[arg + 1] = 1;
+  }
+}
+
+template <class S>
+void MidRadEvaluator<S>::leafEnclosure(std::size_t i, S* m, S* r) const {
+  // Interval enclosures of the leaf and its partials over the box, as midpoint-radius, once
+  // per distinct leaf and run.
+  S* memoMid = &leafMid_[i * stride_];
+  S* memoRad = &leafRad_[i * stride_];
+  if (!leafDone_[i]) {
+    const TapeLeaf& leaf = tape_->leaves()[i];
+    const PiecewiseBernstein& p = *leaf.polynomial;
+    Interval<S> local[8];  // PiecewiseBernstein::validate allows at most 8 axes
+    for (int a = 0; a < p.dim(); ++a) {
+      const auto j = static_cast<std::size_t>(p.axes[a]);
+      local[a] = Interval<S>(centre_[j] - radius_[j], centre_[j] + radius_[j]);
+    }
+    const std::span<const Interval<S>> span(local, static_cast<std::size_t>(p.dim()));
+    toMidRad(p.enclose<S>(span), up_, m[0], r[0]);
+    if (stride_ > 1)
+      for (int a = 0; a < p.dim(); ++a)
+        toMidRad(leaf.partials[a]->template enclose<S>(span), up_, m[p.axes[a] + 1],
+                 r[p.axes[a] + 1]);
+    for (std::size_t q = 0; q < stride_; ++q) memoMid[q] = m[q], memoRad[q] = r[q];
+    leafDone_[i] = 1;
+    return;
+  }
+  for (std::size_t q = 0; q < stride_; ++q) m[q] = memoMid[q], r[q] = memoRad[q];
+}
+
+template <class S>
+bool MidRadEvaluator<S>::apply(const TapeOp& op, S* xm, S* xr, const S* ym, const S* yr) const {
+  using std::abs;
+  const S& u = u_;
+  const S& up = up_;
+  S& sm = sm_;
+  S& sr = sr_;
+  switch (op.kind) {
+    case K::kAdd:
+    case K::kSub:
+      for (std::size_t q = 0; q < stride_; ++q)
+        if (!isZero(ym[q], yr[q])) addMidRad(xm[q], xr[q], ym[q], yr[q], op.kind == K::kSub, u, up);
+      break;
+    case K::kMul:
+      // Product rule (xy)' = x' y + x y', then the value.
+      for (std::size_t q = 1; q < stride_; ++q) {
+        const bool zx = isZero(xm[q], xr[q]), zy = isZero(ym[q], yr[q]);
+        if (zx && zy) continue;
+        mulMidRad(xm[0], xr[0], ym[q], yr[q], u, up, sm, sr);
+        if (zx) {
+          xm[q] = sm;
+          xr[q] = sr;
+          continue;
+        }
+        mulMidRad(xm[q], xr[q], ym[0], yr[0], u, up, xm[q], xr[q]);
+        if (!zy) addMidRad(xm[q], xr[q], sm, sr, false, u, up);
+      }
+      mulMidRad(xm[0], xr[0], ym[0], yr[0], u, up, xm[0], xr[0]);
+      break;
+    case K::kDiv: {
+      // The divisor is a constant: multiply by an enclosure of its reciprocal.
+      const S mag = abs(ym[0]);
+      const S gap = mag - yr[0];
+      if (!(gap > 2 * u * mag)) return false;
+      S& fm = fm_;
+      S& fr = fr_;
+      fm = S(1) / ym[0];
+      fr = (yr[0] / (mag * gap) + u * abs(fm)) * up;
+      for (std::size_t q = 0; q < stride_; ++q)
+        if (!isZero(xm[q], xr[q])) mulMidRad(xm[q], xr[q], fm, fr, u, up, xm[q], xr[q]);
+      break;
+    }
+    case K::kPow:
+      power(op.arg, xm, xr);
+      break;
+    case K::kNeg:
+      for (std::size_t q = 0; q < stride_; ++q) xm[q] = -xm[q];
+      break;
+    default:
+      break;
+  }
+  return true;
+}
+
+template <class S>
+void MidRadEvaluator<S>::power(int p, S* xm, S* xr) const {
+  // x^p = x^(p-1) x by binary powering, and (x^p)' = p x^(p-1) x'.
+  const S& u = u_;
+  const S& up = up_;
+  if (p == 0) {
+    xm[0] = 1;
+    xr[0] = 0;
+    for (std::size_t q = 1; q < stride_; ++q) xm[q] = xr[q] = 0;
+    return;
+  }
+  S &tm = tm_, &tr = tr_, &sm = sm_, &sr = sr_, &fm = fm_, &fr = fr_;
+  tm = 1;
+  tr = 0;
+  sm = xm[0];
+  sr = xr[0];
+  for (int e = p - 1; e > 0; e >>= 1) {
+    if (e & 1) mulMidRad(tm, tr, sm, sr, u, up, tm, tr);
+    if (e > 1) mulMidRad(sm, sr, sm, sr, u, up, sm, sr);
+  }
+  mulMidRad(S(p), S(0), tm, tr, u, up, fm, fr);
+  for (std::size_t q = 1; q < stride_; ++q)
+    if (!isZero(xm[q], xr[q])) mulMidRad(fm, fr, xm[q], xr[q], u, up, xm[q], xr[q]);
+  mulMidRad(tm, tr, xm[0], xr[0], u, up, xm[0], xr[0]);
+}
+
+template class MidRadEvaluator<double>;
+template class MidRadEvaluator<Mpfr>;
+
+}  // namespace ndc

@@ -1,0 +1,63 @@
+/// \file midrad.hpp
+/// Evaluation of a Tape in midpoint-radius arithmetic, with or without the gradient.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "framework/core/scalar.hpp"
+#include "framework/core/tape.hpp"
+
+namespace ndc {
+
+/// Runs a Tape on a box given as centre +- radius in midpoint-radius arithmetic: every
+/// operation rounds to nearest and adds a bound on its rounding error (and the radii's) to the
+/// radius, so the result encloses the range as rigorously as outward-rounded intervals, without
+/// switching the rounding mode per operation. Underflow is ignored.
+///
+/// The scratch is sized once: run() does not allocate, and an instance must not be shared
+/// between threads.
+template <class S>
+class MidRadEvaluator {
+ public:
+  /// Prepares the constants of `tape` as midpoint and radius.
+  explicit MidRadEvaluator(std::shared_ptr<const Tape> tape);
+
+  /// Runs the program with variable j = centre[j] +- radius[j]. With `gradient` the result
+  /// holds the value and the n partial derivatives, else the value only. False when a divisor
+  /// encloses 0 or the value is not finite.
+  bool run(std::span<const S> centre, std::span<const S> radius, bool gradient) const;
+
+  /// Midpoint and radius of the value (q = 0) or of the partial derivative along q - 1 (after
+  /// a run with the gradient).
+  const S& mid(int q) const { return stackMid_[static_cast<std::size_t>(q)]; }
+  const S& rad(int q) const { return stackRad_[static_cast<std::size_t>(q)]; }
+
+ private:
+  /// Pushes a constant, variable or leaf into slot (m, r).
+  void pushOperand(const TapeOp& op, S* m, S* r) const;
+  /// The enclosures of leaf i and its partials, once per run.
+  void leafEnclosure(std::size_t i, S* m, S* r) const;
+  /// Applies a unary or binary instruction to the top slots x (and y above it); false when a
+  /// divisor encloses 0.
+  bool apply(const TapeOp& op, S* xm, S* xr, const S* ym, const S* yr) const;
+  /// x^p and p x^(p-1) x' by binary powering.
+  void power(int p, S* xm, S* xr) const;
+
+  std::shared_ptr<const Tape> tape_;
+  std::vector<S> constMid_, constRad_;  // per constant
+  S u_, up_;  // unit of the arithmetic (>= 2 x unit round-off) and 1 + 8 u
+  // Per run: the stride (n + 1 or 1), the centre and radii, the stack ((n + 1) per slot) and
+  // the enclosures of each distinct leaf ((n + 1) per leaf).
+  mutable std::size_t stride_ = 1;
+  mutable std::span<const S> centre_, radius_;
+  mutable std::vector<S> stackMid_, stackRad_, leafMid_, leafRad_;
+  mutable std::vector<unsigned char> leafDone_;
+  mutable S tm_, tr_, sm_, sr_, fm_, fr_;  // temporaries of the products (no allocation per run)
+};
+
+extern template class MidRadEvaluator<double>;
+extern template class MidRadEvaluator<Mpfr>;
+
+}  // namespace ndc

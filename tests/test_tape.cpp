@@ -1,0 +1,219 @@
+// Tests of the compiled expression (Tape) and its evaluators beyond expression.hpp: built
+// programs against parsed ones, shared leaves, the midpoint-radius evaluator against exact
+// values, the magnitude bound's counts, and the one-switch interval de Casteljau kernel against
+// the per-operation interval arithmetic it replaces (bit for bit).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "framework/core/expression.hpp"
+#include "framework/core/magnitude.hpp"
+#include "framework/core/midrad.hpp"
+#include "framework/core/tape.hpp"
+#include "tests/test_support.hpp"
+
+namespace {
+
+using ndc::Box;
+using ndc::Expression;
+using ndc::Interval;
+using ndc::Mpfr;
+using ndc::Tape;
+using ndc::TapeOp;
+using ndc::test::exact;
+using ndc::test::kExactBits;
+using ndc::test::PrecisionScope;
+using ndc::test::uniform;
+
+const std::vector<std::string> kXyz = {"x", "y", "z"};
+
+// A piecewise leaf in (x, z): two pieces along x (breaks -1, 0, 1), degree 2 x 1.
+std::shared_ptr<const ndc::PiecewiseBernstein> makeLeaf() {
+  auto leaf = std::make_shared<ndc::PiecewiseBernstein>();
+  leaf->name = "L";
+  leaf->axes = {0, 2};
+  leaf->breaks = {{-1, 0, 1}, {-2, 2}};
+  for (int piece = 0; piece < 2; ++piece) {
+    Box<double> box{{piece - 1.0, -2}, {piece + 0.0, 2}};
+    ndc::Bernstein<double> b(box, {2, 1});
+    const double c[6] = {0.5, -1.25, 2, 0.75 * piece, 1, -0.5};
+    for (std::size_t i = 0; i < 6; ++i) b.coefficients()[i] = c[i] + piece;
+    leaf->pieces.push_back(b);
+  }
+  return leaf;
+}
+
+// The interval de Casteljau of the per-operation interval arithmetic (the reference the kernel
+// must reproduce bit for bit).
+Interval<double> referenceDeCasteljau(const ndc::Bernstein<double>& piece,
+                                      const std::vector<Interval<double>>& t) {
+  std::vector<Interval<double>> work;
+  for (double c : piece.coefficients()) work.emplace_back(c);
+  std::size_t count = work.size();
+  for (int a = 0; a < piece.dim(); ++a) {
+    const int d = piece.degree(a);
+    const std::size_t block = static_cast<std::size_t>(d) + 1, blocks = count / block;
+    for (std::size_t b = 0; b < blocks; ++b) {
+      Interval<double>* w = &work[b * block];
+      for (int r = 1; r <= d; ++r)
+        for (int i = 0; i + r <= d; ++i) w[i] += t[a] * (w[i + 1] - w[i]);
+      if (b) work[b] = w[0];
+    }
+    count = blocks;
+  }
+  return work[0];
+}
+
+}  // namespace
+
+TEST_CASE("Tape: a built expression is the program of its parsed text", "[tape]") {
+  using K = TapeOp::Kind;
+  const Expression a = Expression::parse("x/3 - y", kXyz);
+  const Expression b = Expression::parse("y^2 + 0.1*z", kXyz);
+  const Expression built = a * b - a;
+  const Expression parsed = Expression::parse("(x/3 - y)*(y^2 + 0.1*z) - (x/3 - y)", kXyz);
+  const Tape& t = built.tape();
+  REQUIRE(t.ops().size() == parsed.tape().ops().size());
+  for (std::size_t i = 0; i < t.ops().size(); ++i) {
+    INFO("instruction " << i);
+    CHECK(t.ops()[i].kind == parsed.tape().ops()[i].kind);
+    if (t.ops()[i].kind != K::kConstant) CHECK(t.ops()[i].arg == parsed.tape().ops()[i].arg);
+  }
+  CHECK(t.stackDepth() == parsed.tape().stackDepth());
+  // Both divisors point at their own constant subprogram, the second one shifted by the join.
+  int divisions = 0;
+  for (std::size_t i = 0; i < t.ops().size(); ++i) {
+    if (t.ops()[i].kind != K::kDiv) continue;
+    ++divisions;
+    CHECK(ndc::evaluateConstant<double>(t, static_cast<std::size_t>(t.ops()[i].arg), i) == 3);
+  }
+  CHECK(divisions == 2);
+  // The same program gives the same bits, value and gradient.
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<double> x = {uniform<double>(rng, -2, 2), uniform<double>(rng, -2, 2),
+                             uniform<double>(rng, -2, 2)};
+    std::vector<double> g1(3), g2(3);
+    CHECK(built.evaluate<double>(x, g1) == parsed.evaluate<double>(x, g2));
+    CHECK(g1 == g2);
+  }
+  CHECK(built.degrees() == std::vector<int>{1, 3, 1});
+  CHECK(t.totalDegree(2) == 2);
+  CHECK(Expression::parse("3*x - y/2 + 1", kXyz).tape().totalDegree(2) == 1);
+}
+
+TEST_CASE("Tape: a leaf used many times is one leaf, computed once", "[tape]") {
+  const auto leaf = makeLeaf();
+  const Expression l = Expression::polynomial(3, leaf);
+  const Expression y = Expression::variable(3, 1, "y");
+  const Expression e = l * l + y * l - l;
+  REQUIRE(e.tape().leaves().size() == 1);
+  int uses = 0;
+  for (const TapeOp& op : e.tape().ops()) uses += op.kind == TapeOp::Kind::kLeaf;
+  CHECK(uses == 4);
+  CHECK(e.breaks(0) == std::vector<double>{-1, 0, 1});
+  CHECK(e.breaks(1).empty());
+  CHECK(e.degrees() == std::vector<int>{4, 1, 2});
+  // Value and gradient against the leaf evaluated directly.
+  std::mt19937 rng(9);
+  for (int trial = 0; trial < 20; ++trial) {
+    const std::vector<double> x = {uniform<double>(rng, -1, 1), uniform<double>(rng, -2, 2),
+                                   uniform<double>(rng, -2, 2)};
+    const std::vector<double> local = {x[0], x[2]};
+    const double v = leaf->evaluate<double>(local);
+    std::vector<double> g(3);
+    const double value = e.evaluate<double>(x, g);
+    CHECK(value == Approx(v * v + x[1] * v - v).margin(1e-12));
+    CHECK(g[1] == Approx(v).margin(1e-12));
+  }
+}
+
+TEMPLATE_TEST_CASE("Tape: the midpoint-radius evaluator encloses value and gradient", "[tape]",
+                   NDC_SCALARS) {
+  using S = TestType;
+  PrecisionScope<S> scope(160);
+  std::mt19937 rng(31);
+  const std::vector<std::string> texts = {"(x^2+y^2+z^2+0.84)^2 - 4*(x^2+y^2)",
+                                          "x*y*z - (x - y)^2*(y - z)^2/2.5 + z^4 - -x",
+                                          "(x - 2*y)^4 - x*y/3 + 1.5e-1*z"};
+  for (const std::string& text : texts) {
+    INFO(text);
+    const Expression e = Expression::parse(text, kXyz);
+    const ndc::MidRadEvaluator<S> evaluator(e.sharedTape());
+    for (int trial = 0; trial < 8; ++trial) {
+      std::vector<S> c(3), r(3);
+      for (int j = 0; j < 3; ++j) {
+        c[j] = uniform<S>(rng, -1.5, 1.5);
+        r[j] = uniform<S>(rng, 0, 0.3);
+      }
+      REQUIRE(evaluator.run(c, r, true));
+      for (int i = 0; i < 10; ++i) {
+        // A point of the box, and the exact value and gradient there.
+        std::vector<S> x(3);
+        for (int j = 0; j < 3; ++j) x[j] = c[j] + uniform<S>(rng, -0.99, 0.99) * r[j];
+        PrecisionScope<Mpfr> high(kExactBits);
+        std::vector<Mpfr> p, g(3);
+        for (const S& v : x) p.push_back(exact(v));
+        const Mpfr value = e.evaluate<Mpfr>(p, g);
+        for (int q = 0; q <= 3; ++q) {
+          const Mpfr truth = q == 0 ? value : g[q - 1];
+          CHECK(abs(truth - exact(evaluator.mid(q))) <= exact(evaluator.rad(q)));
+        }
+      }
+    }
+  }
+}
+
+TEMPLATE_TEST_CASE("Tape: the magnitude bound and its operation count", "[tape]", NDC_SCALARS) {
+  using S = TestType;
+  PrecisionScope<S> scope(160);
+  struct Known {
+    const char* text;
+    int count;         // rounding operations + total degree
+    double magnitude;  // at x = -2, y = 3, z = 0.5
+  };
+  const std::vector<Known> known = {
+      {"x^2 - 3*y", 4 + 2, 4 + 9},
+      {"x/4", 2 + 1, 0.5},
+      {"-(x*y) + z/(1+1)", (1 + 1 + 2) + 2, 6 + 0.25},
+      {"(x + y)^3", (1 + 2) + 3, 125},
+  };
+  const std::vector<S> absX = {S(2), S(3), S(0.5)};
+  for (const Known& k : known) {
+    INFO(k.text);
+    const ndc::MagnitudeBound<S> bound(Expression::parse(k.text, kXyz).sharedTape());
+    std::vector<S> stack;
+    CHECK(bound.count() == k.count);
+    CHECK(ndc::toDouble(bound(absX, stack)) == Approx(k.magnitude));
+  }
+}
+
+TEST_CASE("Tape: the one-switch interval de Casteljau equals per-operation intervals", "[tape]") {
+  std::mt19937 rng(77);
+  for (int trial = 0; trial < 200; ++trial) {
+    const int p = 1 + trial % 3;
+    std::vector<int> degrees;
+    Box<double> box;
+    for (int a = 0; a < p; ++a) {
+      degrees.push_back(1 + static_cast<int>(rng() % 5));
+      box.lo.push_back(0);
+      box.hi.push_back(1);
+    }
+    ndc::Bernstein<double> piece(box, degrees);
+    for (double& c : piece.coefficients()) c = uniform<double>(rng, -3, 3) / 7;
+    std::vector<Interval<double>> t;
+    for (int a = 0; a < p; ++a) {
+      const double lo = uniform<double>(rng, -0.1, 1.0), w = uniform<double>(rng, 0, 0.3) / 3;
+      t.emplace_back(lo, lo + w);
+    }
+    const Interval<double> fast =
+        ndc::tensorDeCasteljauEnclosure(piece.coefficients(), piece.degrees(), t.data());
+    const Interval<double> reference = referenceDeCasteljau(piece, t);
+    CHECK(fast.lower() == reference.lower());
+    CHECK(fast.upper() == reference.upper());
+  }
+}
