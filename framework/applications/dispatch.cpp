@@ -61,15 +61,8 @@ struct Reader {
     return k;
   }
 
-  SurfaceSpec surface(const toml::node& node, int index) const {
-    const std::string what = "surfaces[" + std::to_string(index) + "]";
-    const toml::table& t = r.tableOf(node, what);
-    r.onlyKeys(t, {"name", "degree", "points", "weights", "knots_u", "knots_v", "box"}, what);
-    SurfaceSpec s;
-    s.name = t.get("name") ? r.stringOf(*t.get("name"), what + ".name")
-                           : "S" + std::to_string(index + 1);
-    // Control points: rows (v index) of points (u index).
-    const toml::node& pointsNode = r.require(t, "points");
+  /// Control points: rows (v index) of points (u index), into s.points, s.countU, s.countV.
+  void controlPoints(const toml::node& pointsNode, const std::string& what, SurfaceSpec& s) const {
     const toml::array& rows = r.arrayOf(pointsNode, what + ".points");
     if (rows.size() < 2 || static_cast<long>(rows.size()) > kMaxControlPoints)
       r.fail(pointsNode, what + ".points needs 2 to 64 rows of control points");
@@ -86,6 +79,42 @@ struct Reader {
         s.points.push_back(
             point(row[i], what + ".points[" + std::to_string(j) + "][" + std::to_string(i) + "]"));
     }
+  }
+
+  /// Positive weights in the shape of the points, scaled by a power of two.
+  void weights(const toml::node& w, const std::string& what, SurfaceSpec& s) const {
+    const toml::array& wr = r.arrayOf(w, what + ".weights");
+    if (static_cast<int>(wr.size()) != s.countV)
+      r.fail(w, what + ".weights must have the shape of points");
+    for (std::size_t j = 0; j < wr.size(); ++j) {
+      const toml::array& row = r.arrayOf(wr[j], what + ".weights[" + std::to_string(j) + "]");
+      if (static_cast<int>(row.size()) != s.countU)
+        r.fail(wr[j], what + ".weights must have the shape of points");
+      for (std::size_t i = 0; i < row.size(); ++i) {
+        const double v = r.numberOf(row[i], what + ".weights");
+        if (!(v > 0))
+          r.fail(row[i], what + ": weights must be positive (the denominator stays positive)");
+        s.weights.push_back(v);
+      }
+    }
+    // A rational surface is unchanged when all its weights are scaled alike: scale them by a
+    // power of two (exact) so the largest lies in [1, 2), or weights near 1e-300 underflow to 0
+    // in the products the equations are built from and the run solves garbage.
+    const double largest = *std::max_element(s.weights.begin(), s.weights.end());
+    int exponent = 0;
+    std::frexp(largest, &exponent);
+    for (double& weight : s.weights) weight = std::ldexp(weight, 1 - exponent);
+  }
+
+  SurfaceSpec surface(const toml::node& node, int index) const {
+    const std::string what = "surfaces[" + std::to_string(index) + "]";
+    const toml::table& t = r.tableOf(node, what);
+    r.onlyKeys(t, {"name", "degree", "points", "weights", "knots_u", "knots_v", "box"}, what);
+    SurfaceSpec s;
+    s.name = t.get("name") ? r.stringOf(*t.get("name"), what + ".name")
+                           : "S" + std::to_string(index + 1);
+    const toml::node& pointsNode = r.require(t, "points");
+    controlPoints(pointsNode, what, s);
     // Degrees: given, or count - 1 (Bezier).
     if (const toml::node* d = t.get("degree")) {
       const toml::array& a = r.arrayOf(*d, what + ".degree");
@@ -118,29 +147,7 @@ struct Reader {
       const auto bu = range(a[0], what + ".box[0]"), bv = range(a[1], what + ".box[1]");
       s.box = {bu[0], bu[1], bv[0], bv[1]};
     }
-    if (const toml::node* w = t.get("weights")) {
-      const toml::array& wr = r.arrayOf(*w, what + ".weights");
-      if (static_cast<int>(wr.size()) != s.countV)
-        r.fail(*w, what + ".weights must have the shape of points");
-      for (std::size_t j = 0; j < wr.size(); ++j) {
-        const toml::array& row = r.arrayOf(wr[j], what + ".weights[" + std::to_string(j) + "]");
-        if (static_cast<int>(row.size()) != s.countU)
-          r.fail(wr[j], what + ".weights must have the shape of points");
-        for (std::size_t i = 0; i < row.size(); ++i) {
-          const double v = r.numberOf(row[i], what + ".weights");
-          if (!(v > 0))
-            r.fail(row[i], what + ": weights must be positive (the denominator stays positive)");
-          s.weights.push_back(v);
-        }
-      }
-      // A rational surface is unchanged when all its weights are scaled alike: scale them by a
-      // power of two (exact) so the largest lies in [1, 2), or weights near 1e-300 underflow to 0
-      // in the products the equations are built from and the run solves garbage.
-      const double largest = *std::max_element(s.weights.begin(), s.weights.end());
-      int exponent = 0;
-      std::frexp(largest, &exponent);
-      for (double& weight : s.weights) weight = std::ldexp(weight, 1 - exponent);
-    }
+    if (const toml::node* w = t.get("weights")) weights(*w, what, s);
     return s;
   }
 

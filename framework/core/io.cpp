@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <sstream>
 #include <string>
@@ -136,11 +137,12 @@ void writeAtomically(const std::filesystem::path& target, const std::string& tex
   if (error) throw InputError(target.string() + ": cannot write the file: " + error.message());
 }
 
-std::string toJson(const Summary& s) {
-  std::ostringstream o;
+namespace {
+
+// The parts of summary.json (docs/contracts.md 4.2), each ending where the next begins.
+
+void jsonSettings(std::ostream& o, const Summary& s) {
   const Settings& t = s.settings;
-  o << "{\n  \"schema\": \"ndcontour.summary/1\",\n  \"problem\": " << jsonQuoted(s.problem)
-    << ",\n  \"n\": " << s.n << ",\n  \"k\": " << s.k << ",\n";
   o << "  \"settings\": {\"depth\": " << t.depth << ", \"bounding\": " << jsonQuoted(t.bounding)
     << ", \"subdivision\": " << jsonQuoted(t.subdivision)
     << ", \"scalar\": " << jsonQuoted(t.scalar) << ", \"precision_bits\": " << t.precisionBits
@@ -154,6 +156,9 @@ std::string toJson(const Summary& s) {
   for (std::size_t i = 0; i < s.parameters.size(); ++i)
     o << (i ? ", " : "") << jsonQuoted(s.parameters[i].first) << ": " << s.parameters[i].second;
   o << "}},\n";
+}
+
+void jsonCellsAndMesh(std::ostream& o, const Summary& s) {
   o << "  \"cells\": {\"visited\": " << s.visited << ", \"solution\": " << s.solution
     << ", \"normal\": " << s.normal << ", \"abnormal\": " << s.abnormal
     << ", \"failed\": " << s.failed << "},\n";
@@ -167,8 +172,12 @@ std::string toJson(const Summary& s) {
     << ", \"branch_vertices\": " << m.branchVertices << "},\n";
   o << "  \"accuracy\": {\"max_residual\": " << number(m.maxResidual)
     << ", \"max_chord_error\": " << number(m.maxChordError) << "},\n";
+}
+
+void jsonDiagnostics(std::ostream& o, const Summary& s) {
   o << "  \"diagnostics\": {\"ambiguous_cells\": " << s.ambiguousCells
-    << ", \"singular_cells\": " << s.singularCells << ", \"chord_failures\": " << m.chordFailures
+    << ", \"singular_cells\": " << s.singularCells
+    << ", \"chord_failures\": " << s.mesh.chordFailures
     << ", \"off_manifold_vertices\": " << s.offManifoldVertices;
   // Extensions (docs/contracts.md 4.5): located singular points and the crossing's perturbation.
   o << ",\n    \"singular_points\": [";
@@ -182,6 +191,9 @@ std::string toJson(const Summary& s) {
   o << ",\n    \"perturbation\": {\"level\": " << numberList(q.level)
     << ", \"attempts\": " << q.attempts << ", \"degenerate_crossings\": " << q.degenerateCrossings
     << "}},\n";
+}
+
+void jsonTopologyAndTiming(std::ostream& o, const Summary& s) {
   // Extension: the topology certificate and the adaptive refinement (docs/certificate.md).
   const TopologyRecord& g = s.topology;
   o << "  \"topology\": {\"certified\": " << (g.certified ? "true" : "false")
@@ -194,12 +206,14 @@ std::string toJson(const Summary& s) {
     << ", \"projection\": " << number(s.tProjection)
     << ", \"connection\": " << number(s.tConnection) << ", \"analysis\": " << number(s.tAnalysis)
     << ", \"total\": " << number(s.tTotal) << "}";
-  // Extension: the run's budgets (docs/input-limits.md) and the memory it was estimated to need.
+}
+
+void jsonExtensions(std::ostream& o, const Summary& s) {
+  // The run's budgets (docs/input-limits.md) and the memory it was estimated to need.
   o << ",\n  \"budget\": {\"max_memory_bytes\": " << number(s.memoryBudget)
-    << ", \"estimated_memory_bytes\": " << number(s.estimatedMemory)
-    << ", \"timeout_s\": " << (t.timeoutSeconds ? number(*t.timeoutSeconds) : "null") << "}";
-  // Extension (docs/contracts.md 4.5): the problem's [expect] compared with the mesh, when it has
-  // one.
+    << ", \"estimated_memory_bytes\": " << number(s.estimatedMemory) << ", \"timeout_s\": "
+    << (s.settings.timeoutSeconds ? number(*s.settings.timeoutSeconds) : "null") << "}";
+  // The problem's [expect] compared with the mesh, when it has one (docs/contracts.md 4.5).
   if (!s.expect.empty()) {
     o << ",\n  \"expect\": {";
     for (std::size_t i = 0; i < s.expect.size(); ++i) {
@@ -213,11 +227,24 @@ std::string toJson(const Summary& s) {
     }
     o << "}";
   }
-  // Extension (application problems): which application, and where its image map is singular.
+  // Application problems: which application, and where its image map is singular.
   if (!s.application.empty())
     o << ",\n  \"application\": {\"name\": " << jsonQuoted(s.application)
       << ", \"image_singular_vertices\": " << s.imageSingularVertices
       << ", \"singular_meaning\": " << jsonQuoted(s.singularName) << "}";
+}
+
+}  // namespace
+
+std::string toJson(const Summary& s) {
+  std::ostringstream o;
+  o << "{\n  \"schema\": \"ndcontour.summary/1\",\n  \"problem\": " << jsonQuoted(s.problem)
+    << ",\n  \"n\": " << s.n << ",\n  \"k\": " << s.k << ",\n";
+  jsonSettings(o, s);
+  jsonCellsAndMesh(o, s);
+  jsonDiagnostics(o, s);
+  jsonTopologyAndTiming(o, s);
+  jsonExtensions(o, s);
   o << "\n}\n";
   return o.str();
 }
@@ -467,24 +494,23 @@ std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const Ru
 
 // --- Reading meshes back ---------------------------------------------------------------------
 
-PlyMesh readPly(const std::filesystem::path& file) {
-  std::ifstream stream(file, std::ios::binary);
-  if (!stream) throw InputError(file.string() + ": cannot read the file");
-  std::ostringstream text;
-  text << stream.rdbuf();
-  std::istringstream in(text.str());
-  const auto fail = [&](const std::string& message) {
-    throw InputError(file.string() + ": " + message);
-  };
+namespace {
+
+/// An element declared in a PLY header.
+struct PlyElement {
+  std::string name;
+  std::size_t count = 0;
+  std::vector<std::string> properties;
+  bool list = false;
+};
+
+using PlyFail = std::function<void(const std::string&)>;
+
+/// The elements of an ASCII PLY header, up to and including end_header.
+std::vector<PlyElement> readPlyHeader(std::istream& in, const PlyFail& fail) {
   std::string line;
   if (!std::getline(in, line) || line != "ply") fail("not a PLY file");
-  struct Element {
-    std::string name;
-    std::size_t count = 0;
-    std::vector<std::string> properties;
-    bool list = false;
-  };
-  std::vector<Element> elements;
+  std::vector<PlyElement> elements;
   bool ascii = false;
   while (std::getline(in, line)) {
     std::istringstream words(line);
@@ -496,7 +522,7 @@ PlyMesh readPly(const std::filesystem::path& file) {
       words >> format;
       ascii = format == "ascii";
     } else if (word == "element") {
-      Element e;
+      PlyElement e;
       words >> e.name >> e.count;
       elements.push_back(e);
     } else if (word == "property") {
@@ -513,37 +539,63 @@ PlyMesh readPly(const std::filesystem::path& file) {
     }
   }
   if (!ascii) fail("only ASCII PLY is read");
+  return elements;
+}
+
+/// One vertex line: x, y, z and the coordinates u0, u1, ...
+void readPlyVertex(const std::string& line, const PlyElement& e, PlyMesh& mesh,
+                   const PlyFail& fail) {
+  std::istringstream words(line);
+  std::map<std::string, double> value;
+  for (const std::string& p : e.properties) {
+    double v = 0;
+    if (!(words >> v)) fail("bad vertex line: " + line);
+    value[p] = v;
+  }
+  if (!value.count("x") || !value.count("y") || !value.count("z")) fail("vertex lacks x, y or z");
+  mesh.xyz.push_back({value["x"], value["y"], value["z"]});
+  std::vector<double> u;
+  for (int j = 0; value.count("u" + std::to_string(j)); ++j)
+    u.push_back(value["u" + std::to_string(j)]);
+  mesh.u.push_back(std::move(u));
+}
+
+/// One edge or face line: its vertex indices (a count first for a list property).
+void readPlySimplex(const std::string& line, const PlyElement& e, PlyMesh& mesh,
+                    const PlyFail& fail) {
+  std::istringstream words(line);
+  std::vector<int> s;
+  int count = 2;
+  if (e.list && !(words >> count)) fail("bad " + e.name + " line: " + line);
+  for (int j = 0; j < count; ++j) {
+    int v = 0;
+    if (!(words >> v) || v < 0 || static_cast<std::size_t>(v) >= mesh.xyz.size())
+      fail("bad " + e.name + " line: " + line);
+    s.push_back(v);
+  }
+  mesh.simplices.push_back(std::move(s));
+}
+
+}  // namespace
+
+PlyMesh readPly(const std::filesystem::path& file) {
+  std::ifstream stream(file, std::ios::binary);
+  if (!stream) throw InputError(file.string() + ": cannot read the file");
+  std::ostringstream text;
+  text << stream.rdbuf();
+  std::istringstream in(text.str());
+  const PlyFail fail = [&](const std::string& message) {
+    throw InputError(file.string() + ": " + message);
+  };
   PlyMesh mesh;
-  for (const Element& e : elements) {
+  std::string line;
+  for (const PlyElement& e : readPlyHeader(in, fail)) {
     for (std::size_t i = 0; i < e.count; ++i) {
       if (!std::getline(in, line)) fail("ends inside element '" + e.name + "'");
-      std::istringstream words(line);
-      if (e.name == "vertex") {
-        std::map<std::string, double> value;
-        for (const std::string& p : e.properties) {
-          double v = 0;
-          if (!(words >> v)) fail("bad vertex line: " + line);
-          value[p] = v;
-        }
-        if (!value.count("x") || !value.count("y") || !value.count("z"))
-          fail("vertex lacks x, y or z");
-        mesh.xyz.push_back({value["x"], value["y"], value["z"]});
-        std::vector<double> u;
-        for (int j = 0; value.count("u" + std::to_string(j)); ++j)
-          u.push_back(value["u" + std::to_string(j)]);
-        mesh.u.push_back(std::move(u));
-      } else if (e.name == "edge" || e.name == "face") {
-        std::vector<int> s;
-        int count = 2;
-        if (e.list && !(words >> count)) fail("bad " + e.name + " line: " + line);
-        for (int j = 0; j < count; ++j) {
-          int v = 0;
-          if (!(words >> v) || v < 0 || static_cast<std::size_t>(v) >= mesh.xyz.size())
-            fail("bad " + e.name + " line: " + line);
-          s.push_back(v);
-        }
-        mesh.simplices.push_back(std::move(s));
-      }
+      if (e.name == "vertex")
+        readPlyVertex(line, e, mesh, fail);
+      else if (e.name == "edge" || e.name == "face")
+        readPlySimplex(line, e, mesh, fail);
     }
   }
   return mesh;
