@@ -144,13 +144,7 @@ void validateSolveOptions(SolveOptions& o) {
   checkSpec("--connection", s.connection, connectionRegistry());
   checkName("--scalar", s.scalar, kScalarNames, "scalar type");
 
-  if (s.depth < kMinDepth || s.depth > kMaxDepth)
-    throw UsageError("--depth " + std::to_string(s.depth) + " is out of range (accepted: " +
-                     std::to_string(kMinDepth) + ".." + std::to_string(kMaxDepth) + ")");
-
-  if (s.maxDepth != 0 && (s.maxDepth < kMinDepth || s.maxDepth > kMaxDepth))
-    throw UsageError("--max-depth " + std::to_string(s.maxDepth) + " is out of range (accepted: " +
-                     std::to_string(kMinDepth) + ".." + std::to_string(kMaxDepth) + ")");
+  checkDepths(s.depth, s.maxDepth, 0, "");
 
   // The precision belongs to the scalar: double is always 53 bits.
   if (o.precision) {
@@ -189,12 +183,7 @@ void validateSolveOptions(SolveOptions& o) {
 }
 
 void validateSolveOptions(const SolveOptions& o, const Problem& problem) {
-  // Cells are keyed by a packed 64-bit multi-index of n * L bits (grid.hpp).
-  if (!Grid::fits(problem.n(), o.settings.depth))
-    throw UsageError("--depth " + std::to_string(o.settings.depth) + " is too deep for the " +
-                     std::to_string(problem.n()) + " variables of " + problem.path +
-                     ": n * depth must be at most 64 (accepted: depth <= " +
-                     std::to_string(std::min(kMaxDepth, 64 / problem.n())) + ")");
+  checkDepths(o.settings.depth, o.settings.maxDepth, problem.n(), problem.path);
 }
 
 }  // namespace ndc::cli

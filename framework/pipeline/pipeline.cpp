@@ -544,14 +544,28 @@ int defaultMaxDepth(int n, int depth) {
 }
 
 int maxDepthOf(const Problem& problem, const Settings& settings) {
-  if (settings.maxDepth == 0) return defaultMaxDepth(problem.n(), settings.depth);
-  if (settings.maxDepth < settings.depth || !Grid::fits(problem.n(), settings.maxDepth)) {
-    throw InputError(problem.path + ": --max-depth " + std::to_string(settings.maxDepth) +
-                     " is out of range for depth " + std::to_string(settings.depth) +
-                     " and n = " + std::to_string(problem.n()) +
-                     " (need depth <= max-depth, n * max-depth <= 64 and max-depth <= 30)");
-  }
-  return settings.maxDepth;
+  return settings.maxDepth == 0 ? defaultMaxDepth(problem.n(), settings.depth) : settings.maxDepth;
+}
+
+void checkDepths(int depth, int maxDepth, int n, std::string_view file) {
+  const std::string at = file.empty() ? std::string() : std::string(file) + ": ";
+  const auto check = [&](const char* option, int level) {
+    const std::string given = at + option + " " + std::to_string(level);
+    if (level < kMinDepth || level > kMaxDepth)
+      throw UsageError(given + " is out of range (accepted: " + std::to_string(kMinDepth) + ".." +
+                       std::to_string(kMaxDepth) + ")");
+    // Cells are keyed by a packed 64-bit multi-index of n * level bits (grid.hpp).
+    if (n > 0 && !Grid::fits(n, level))
+      throw UsageError(given + " is too deep for " + std::to_string(n) +
+                       " variables: n * level must be at most 64 (accepted: " + option +
+                       " <= " + std::to_string(std::min(kMaxDepth, 64 / n)) + ")");
+  };
+  check("--depth", depth);
+  if (maxDepth == 0) return;
+  check("--max-depth", maxDepth);
+  if (maxDepth < depth)
+    throw UsageError(at + "--max-depth " + std::to_string(maxDepth) + " is below --depth " +
+                     std::to_string(depth));
 }
 
 StrategyChoices parseStrategies(const Settings& settings) {
@@ -563,12 +577,7 @@ StrategyChoices parseStrategies(const Settings& settings) {
 }
 
 RunResult runPipeline(const Problem& problem, const Settings& settings, const Progress& progress) {
-  if (settings.depth < 1 || !Grid::fits(problem.n(), settings.depth)) {
-    throw InputError(problem.path + ": depth " + std::to_string(settings.depth) +
-                     " is out of range for n = " + std::to_string(problem.n()) +
-                     " (need 1 <= depth and n * depth <= 64)");
-  }
-  maxDepthOf(problem, settings);  // refuses a bad --max-depth before any work
+  checkDepths(settings.depth, settings.maxDepth, problem.n(), problem.path);
   // The default connection builds curves and surfaces only: refuse other k before any work.
   // Every strategy spec is checked before any work (UsageError on a bad name or parameter).
   const StrategyChoices choices = parseStrategies(settings);

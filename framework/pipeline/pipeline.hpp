@@ -28,6 +28,14 @@ inline constexpr unsigned kMinPrecision = 24, kMaxPrecision = 4096;
 /// Working precision of `--scalar mpfr` when `--precision` is not given.
 inline constexpr unsigned kDefaultMpfrPrecision = 128;
 
+/// The one check of a run's levels: `depth` (--depth) and `maxDepth` (--max-depth, 0 for the
+/// default) must lie in kMinDepth..kMaxDepth, with depth <= maxDepth, and, when the number of
+/// variables n is known (n > 0), fit the grid's 64-bit cell keys (n * level <= 64). Throws
+/// UsageError with one line naming the option, prefixed by `file` when it is not empty. The
+/// command line calls it before reading the problem (n = 0) and with it; runPipeline before
+/// any work.
+void checkDepths(int depth, int maxDepth, int n, std::string_view file);
+
 /// The five strategy specs of a Settings (`paper:extra_layers=1`), parsed against the
 /// families' registries.
 struct StrategyChoices {
