@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "framework/core/json.hpp"  // flattenJsonNumbers, which reads the runs' summary.json
 #include "framework/core/problem.hpp"
 #include "framework/core/summary.hpp"
 
@@ -139,11 +140,6 @@ inline constexpr std::array<std::string_view, 39> kExperimentSummaryColumns = {
     "topology.refined_cells",
     "topology.uncertified_cells",
     "topology.block_cells"};
-
-/// The numeric fields of a JSON document (numbers and null), in document order, named by
-/// their dotted paths (`cells.visited`); the number text is kept as written, null is "".
-/// Throws std::runtime_error on malformed JSON.
-std::vector<std::pair<std::string, std::string>> flattenJsonNumbers(std::string_view json);
 
 /// Options of one invocation of the runner.
 struct ExperimentOptions {
