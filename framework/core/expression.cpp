@@ -97,9 +97,12 @@ Expression Expression::join(TapeOp::Kind kind, const char* op, const Expression&
   tape->append(*a.tape_);
   if (b) {
     tape->append(*b->tape_);
-    e.text_ = "(" + shown(a.text_) + op + shown(b->text_) + ")";
+    e.text_ = '(' + shown(a.text_);
+    e.text_ += op;
+    e.text_ += shown(b->text_);
+    e.text_ += ')';
   } else {
-    e.text_ = std::string(op) + "(" + shown(a.text_) + ")";
+    e.text_ = std::string(op) + '(' + shown(a.text_) + ')';
   }
   tape->push({kind, 0});
   e.tape_ = std::move(tape);
