@@ -14,6 +14,7 @@
 
 #include "framework/applications/freeform.hpp"
 #include "framework/core/application.hpp"
+#include "framework/core/cell_forms.hpp"
 #include "framework/pipeline/pipeline.hpp"
 #include "tests/test_support.hpp"
 
@@ -253,6 +254,46 @@ TEST_CASE("B-spline surfaces: unclamped and random knot vectors match the defini
           checkAgainstDefinition(s, e, u, v, 1e-12);
         }
   }
+}
+
+TEMPLATE_TEST_CASE("CellForms: each cell maps to its patch's root forms", "[geometry]",
+                   NDC_SCALARS) {
+  using S = TestType;
+  PrecisionScope<S> precision;
+  // Four B-spline patches (root level 1), asked for from the cells of a depth-4 grid: every
+  // cell gets the forms of the patch that contains it, computed once per patch, equal to the
+  // equations' Bernstein forms on the patch box.
+  const Problem p = sectionProblem(wavyBspline(false), 0.1);
+  REQUIRE(p.rootLevel == 1);
+  const Grid grid{p.n(), 4, p.domain};
+  const Box<S> domain = toScalar<S>(p.domain);
+  CellForms<S> forms(p.equations, grid, domain, p.rootLevel);
+  std::set<const std::vector<Bernstein<S>>*> distinct;
+  for (std::int32_t i = 0; i < 16; ++i)
+    for (std::int32_t j = 0; j < 16; ++j) {
+      const std::vector<std::int32_t> cell{i, j}, patch{i >> 3, j >> 3};
+      const std::vector<Bernstein<S>>& root = forms.root(cell, grid.depth);
+      distinct.insert(&root);
+      REQUIRE(&forms.root(patch, 1) == &root);
+      const Box<S> box = cellBox<S>(Grid{p.n(), 1, p.domain}, domain, patch);
+      REQUIRE(root.size() == p.equations.size());
+      for (std::size_t e = 0; e < root.size(); ++e) {
+        const Bernstein<S> expected = p.equations[e].template toBernstein<S>(box);
+        const auto got = root[e].coefficients(), want = expected.coefficients();
+        REQUIRE(std::equal(got.begin(), got.end(), want.begin(), want.end()));
+      }
+    }
+  CHECK(distinct.size() == 4);
+  // A polynomial on the whole domain (root level 0): one set of forms for every cell.
+  const std::vector<std::string> names{"x", "y"};
+  const std::vector<Expression> circle{Expression::parse("x^2 + y^2 - 1", names)};
+  CellForms<S> whole(circle, grid, domain, 0);
+  const std::vector<std::int32_t> a{0, 0}, b{15, 7};
+  const std::vector<Bernstein<S>>& root = whole.root(a, 4);
+  CHECK(&whole.root(b, 4) == &root);
+  const Bernstein<S> expected = circle[0].template toBernstein<S>(domain);
+  CHECK(std::equal(root[0].coefficients().begin(), root[0].coefficients().end(),
+                   expected.coefficients().begin(), expected.coefficients().end()));
 }
 
 TEST_CASE("B-spline input gives the same cells and vertices as its Bezier pieces", "[geometry]") {

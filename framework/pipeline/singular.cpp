@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "framework/core/bernstein.hpp"
+#include "framework/core/cell_forms.hpp"
 #include "strategies/projection/newton.hpp"
 
 namespace ndc {
@@ -68,6 +69,8 @@ class Search {
         options_(options),
         newton_(system),
         grid_(cells.grid),
+        forms_(system.equations(), cells.grid, domain,
+               problem.roots.empty() ? 0 : problem.rootLevel),
         n_(system.n()),
         m_(system.m()),
         eps_(ScalarTraits<S>::epsilon()) {
@@ -126,6 +129,7 @@ class Search {
   const SingularOptions& options_;
   const NewtonProjection<S> newton_;  // its backward-error tolerance
   const Grid& grid_;
+  CellForms<S> forms_;  // the root forms of the blocks
   const int n_, m_;
   const S eps_;
   int blockLevel_ = 0, maxIterations_ = 0;
@@ -133,7 +137,6 @@ class Search {
   std::vector<S> inLo_, inHi_, cellWidth_;
   std::vector<S> scale_;  // s_i
   std::unordered_map<CellKey, Block<S>> blocks_;
-  std::unordered_map<CellKey, std::vector<Bernstein<S>>> roots_;
   // Scratch.
   std::vector<S> f_, jac_, tol_;
 };
@@ -149,20 +152,7 @@ CellKey Search<S>::blockKey(std::span<const std::int32_t> cell) const {
 template <class S>
 const std::vector<Bernstein<S>>& Search<S>::rootFor(std::span<const std::int32_t> cell) {
   // One polynomial per equation on the grid's domain, or per B-spline patch.
-  const int level = problem_.roots.empty() ? 0 : problem_.rootLevel;
-  std::vector<std::int32_t> patch(n_);
-  CellKey key = 0;
-  for (int j = 0; j < n_; ++j) {
-    patch[j] = cell[j] >> (grid_.depth - level);
-    key |= static_cast<CellKey>(patch[j]) << (level * j);
-  }
-  auto it = roots_.find(key);
-  if (it != roots_.end()) return it->second;
-  const Box<S> box =
-      level == 0 ? domain_ : cellBox<S>(Grid{n_, level, grid_.domain}, domain_, patch);
-  std::vector<Bernstein<S>> forms;
-  for (const Expression& e : system_.equations()) forms.push_back(e.template toBernstein<S>(box));
-  return roots_.emplace(key, std::move(forms)).first->second;
+  return forms_.root(cell, grid_.depth);
 }
 
 template <class S>

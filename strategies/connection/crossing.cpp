@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "framework/core/bernstein.hpp"
+#include "framework/core/cell_forms.hpp"
 #include "framework/core/interval.hpp"
 #include "strategies/connection/cell_tree.hpp"
 #include "strategies/connection/certificate.hpp"
@@ -680,10 +681,12 @@ class AdaptiveCrossing {
         k_(in.k),
         m_(n_ - k_),
         maxFaceDepth_(maxFaceDepth),
+        domain_(toScalar<S>(grid_.domain)),
+        cellForms_(in.system.equations(), grid_, domain_,
+                   in.problem.roots.empty() ? 0 : in.problem.rootLevel),
         position_(in, grid_),
         graphTest_(grid_.n, grid_.n - in.k),
         tree_(grid_, std::max(grid_.depth, in.refine ? in.maxLevel : grid_.depth)) {
-    domain_ = toScalar<S>(grid_.domain);
     for (int a = 0; a < n_; ++a) {
       if (k_ == 1) fixedAxes_.push_back({a, -1});
       for (int b = a + 1; k_ == 2 && b < n_; ++b) fixedAxes_.push_back({a, b});
@@ -767,40 +770,26 @@ class AdaptiveCrossing {
  private:
   using Occ = Occupant::Kind;
 
-  /// The root forms a leaf's patches are restricted from (the domain's, or the B-spline
-  /// patch's), with the rounding margin of each equation.
+  /// The root forms a leaf's patches are restricted from (cellForms_: the domain's, or the
+  /// B-spline patch's), with the rounding margin of each equation.
   struct RootForms {
-    std::vector<Bernstein<S>> forms;
+    const std::vector<Bernstein<S>>* forms = nullptr;
     std::vector<S> margins;
   };
 
   const RootForms& rootForms(std::span<const std::int32_t> index, int level) {
-    const Problem& problem = in_.problem;
-    const int patchLevel = problem.roots.empty() ? 0 : problem.rootLevel;
-    CellKey key = 0;
-    std::vector<std::int32_t> patch(n_);
-    for (int j = 0; j < n_; ++j) {
-      patch[j] = index[j] >> (level - patchLevel);
-      key = key * (CellKey{1} << patchLevel) + static_cast<CellKey>(patch[j]);
-    }
-    auto it = rootForms_.find(key);
+    const std::vector<Bernstein<S>>& forms = cellForms_.root(index, level);
+    auto it = rootForms_.find(&forms);
     if (it != rootForms_.end()) return it->second;
-    Box<S> box = domain_;
-    if (!problem.roots.empty()) {
-      Grid patchGrid = grid_;
-      patchGrid.depth = patchLevel;
-      box = cellBox(patchGrid, domain_, patch);
-    }
-    RootForms rf;
+    RootForms rf{&forms, {}};
     const S unit = ScalarTraits<S>::epsilon();
-    for (std::size_t i = 0; i < in_.system.equations().size(); ++i) {
-      rf.forms.push_back(in_.system.equations()[i].template toBernstein<S>(box));
-      const auto [lo, hi] = rf.forms.back().coefficientRange();
+    for (std::size_t i = 0; i < forms.size(); ++i) {
+      const auto [lo, hi] = forms[i].coefficientRange();
       using std::abs;
       const double relative = i < in_.coefficientError.size() ? in_.coefficientError[i] : 0.0;
       rf.margins.push_back((S(relative) + 1024 * unit) * std::max<S>(abs(lo), abs(hi)));
     }
-    return rootForms_.emplace(key, std::move(rf)).first->second;
+    return rootForms_.emplace(&forms, std::move(rf)).first->second;
   }
 
   Box<S> leafBox(std::int32_t leaf) const {
@@ -817,7 +806,7 @@ class AdaptiveCrossing {
     margins_ = rf.margins;
     bool empty = false, band = false;
     for (int i = 0; i < m_; ++i) {
-      patches_[i] = rf.forms[i].restrict(box);
+      patches_[i] = (*rf.forms)[i].restrict(box);
       const S c = level_[i];
       empty = empty || clearsRange(patches_[i], c, c, rf.margins[i]);
       band = band ||
@@ -1455,7 +1444,7 @@ class AdaptiveCrossing {
     box.hi = cellBox(tree_.grid(level), domain_, hi).hi;
     const RootForms& rf = rootForms(lo, level);
     margins_ = rf.margins;
-    for (int i = 0; i < m_; ++i) patches_[i] = rf.forms[i].restrict(box);
+    for (int i = 0; i < m_; ++i) patches_[i] = (*rf.forms)[i].restrict(box);
     if (!patchesGraph() && !intervalEmpty(box, true)) return false;
     if (k_ == 2) {
       // A face of the block's box that fails as a whole: a tentative block may prove it leaf
@@ -1936,13 +1925,14 @@ class AdaptiveCrossing {
   const Grid& grid_;
   int n_, k_, m_, maxFaceDepth_;
   Box<S> domain_;
+  CellForms<S> cellForms_;  ///< the Bernstein forms of every leaf
   const GeneralPosition<S> position_;
   GraphTest<S> graphTest_;
   std::vector<Interval<S>> jacobian_;  ///< m x n enclosure for the graph tests
   CellTree tree_;
   std::vector<std::array<int, 2>> fixedAxes_;  ///< the k fixed axes of each kind of m-face
   std::vector<S> level_;                       ///< c of the current attempt
-  std::map<CellKey, RootForms> rootForms_;
+  std::unordered_map<const std::vector<Bernstein<S>>*, RootForms> rootForms_;
   std::vector<Bernstein<S>> patches_;  ///< the current leaf's patches
   std::vector<S> margins_;
   std::unordered_map<std::uint64_t, FaceResult<S>> faces_;
