@@ -69,7 +69,16 @@ for h in "${harnesses[@]}"; do
   echo "fuzz: $h: ${runs:-?} executions, corpus $(ls "$work/corpus" | wc -l) inputs, exit status $status"
   if [[ $status -ne 0 ]]; then
     failed+=("$h")
-    grep -E 'ERROR|SUMMARY|runtime error|Test unit written|fuzz: check failed' "$work/fuzz.log" | head -20 >&2 || true
+    grep -E 'ERROR|SUMMARY|runtime error|Test unit written|fuzz: check failed|what\(\)|terminate' \
+      "$work/fuzz.log" | head -20 >&2 || true
+    # The stack of the finding and the input itself, so that a log from another machine (CI)
+    # is enough to reproduce it: `base64 -d > input; build-sanitize/bin/<harness> input`.
+    grep -E '^ +#[0-9]+ ' "$work/fuzz.log" | head -30 >&2 || true
+    for f in "$work"/findings/*; do
+      [[ -f $f ]] || continue
+      echo "fuzz: input $(basename "$f") ($(stat -c %s "$f") bytes), base64:" >&2
+      head -c 4096 "$f" | base64 >&2
+    done
     echo "fuzz: $h: finding kept in $work/findings/ (whole log: $work/fuzz.log)" >&2
   fi
 done

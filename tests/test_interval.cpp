@@ -2,6 +2,7 @@
 // 2000-bit MPFR (every operation below is exact at that precision for the operands used).
 #include <catch2/catch.hpp>
 
+#include <limits>
 #include <random>
 #include <string>
 #include <utility>
@@ -208,6 +209,21 @@ TEMPLATE_TEST_CASE("Interval: compound assignment", "[interval]", NDC_SCALARS) {
   CHECK(a.lower() == S(-4));
   CHECK(a.upper() == S(2));
   CHECK_THROWS(a.dividedBy(S(0)));
+}
+
+TEMPLATE_TEST_CASE("Interval: an overflow to NaN may contain zero", "[interval]", NDC_SCALARS) {
+  // inf - inf has NaN ends: no information, so containsZero must not let an exclusion test
+  // discard a box or a regularity test certify a Jacobian on it.
+  using S = TestType;
+  PrecisionScope<S> scope(160);
+  const S inf = S(std::numeric_limits<double>::infinity());
+  Interval<S> nan(inf);
+  nan -= Interval<S>(inf);
+  CHECK(nan.containsZero());
+  Interval<S> product = nan;
+  product *= Interval<S>(S(2), S(3));
+  CHECK(product.containsZero());
+  CHECK_FALSE(Interval<S>(S(1), inf).containsZero());
 }
 
 TEST_CASE("Interval<Mpfr> uses the current precision", "[interval][mpfr]") {

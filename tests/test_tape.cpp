@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <random>
 #include <string>
@@ -216,4 +217,28 @@ TEST_CASE("Tape: the one-switch interval de Casteljau equals per-operation inter
     CHECK(fast.lower() == reference.lower());
     CHECK(fast.upper() == reference.upper());
   }
+}
+
+TEST_CASE("Tape: the one-switch de Casteljau gives the whole line where it overflows", "[tape]") {
+  // Coefficients near the top of double: the differences overflow to inf and inf - inf is
+  // NaN; the enclosure must then be everything (the fuzzer found the NaN end thrown as an
+  // invalid interval).
+  Box<double> box{{0}, {1}};
+  ndc::Bernstein<double> piece(box, {2});
+  piece.coefficients()[0] = -1.7e308;
+  piece.coefficients()[1] = 1.7e308;
+  piece.coefficients()[2] = -1.7e308;
+  const Interval<double> t(0.25, 0.75);
+  const Interval<double> e =
+      ndc::tensorDeCasteljauEnclosure(piece.coefficients(), piece.degrees(), &t);
+  CHECK(e.lower() == -std::numeric_limits<double>::infinity());
+  CHECK(e.upper() == std::numeric_limits<double>::infinity());
+  // Coefficients that do not overflow keep their tight enclosure.
+  piece.coefficients()[0] = -1;
+  piece.coefficients()[1] = 1;
+  piece.coefficients()[2] = -1;
+  const Interval<double> f =
+      ndc::tensorDeCasteljauEnclosure(piece.coefficients(), piece.degrees(), &t);
+  CHECK(f.lower() > -2);
+  CHECK(f.upper() < 2);
 }

@@ -147,7 +147,11 @@ struct DoubleBackend {
   static double midpoint(const Value& v) { return boost::numeric::median(v); }
   static double width(const Value& v) { return boost::numeric::width(v); }
   static bool contains(const Value& v, double x) { return boost::numeric::in(x, v); }
-  static bool containsZero(const Value& v) { return boost::numeric::zero_in(v); }
+  // A NaN end (inf - inf after an overflow) is no information, not an empty set: such an
+  // interval may hold zero, so no test concludes from it that F has no root or J is regular.
+  static bool containsZero(const Value& v) {
+    return std::isnan(v.lower()) || std::isnan(v.upper()) || boost::numeric::zero_in(v);
+  }
   static void add(Value& v, const Value& o) { v += o; }
   static void sub(Value& v, const Value& o) { v -= o; }
   static void mul(Value& v, const Value& o) { v *= o; }
@@ -215,7 +219,8 @@ struct MpfrBackend {
     return r;
   }
   static bool contains(const Value& v, const Mpfr& x) { return mpfi_is_inside_fr(fr(x), &v) != 0; }
-  static bool containsZero(const Value& v) { return mpfi_has_zero(&v) != 0; }
+  // As for double: a NaN end may hold zero.
+  static bool containsZero(const Value& v) { return mpfi_nan_p(&v) || mpfi_has_zero(&v) != 0; }
   static void add(Value& v, const Value& o) { mpfi_add(&v, &v, &o); }
   static void sub(Value& v, const Value& o) { mpfi_sub(&v, &v, &o); }
   static void mul(Value& v, const Value& o) { mpfi_mul(&v, &v, &o); }
@@ -428,6 +433,9 @@ Interval<double> tensorDeCasteljauEnclosure(std::span<const double> coefficients
     lower = work[0].lower();
     upper = work[0].upper();
   }
+  // An overflow (inf - inf) leaves a NaN end: the only enclosure left is the whole line.
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  if (std::isnan(lower) || std::isnan(upper)) return Interval<double>(-kInf, kInf);
   return Interval<double>(lower, upper);
 }
 

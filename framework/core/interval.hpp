@@ -36,6 +36,8 @@ class Interval {
   /// Width rounded up.
   S width() const;
   bool contains(const S& v) const;
+  /// Whether 0 may lie in the interval: true also when an end is NaN (an overflow such as
+  /// inf - inf gives no information), so that no exclusion or regularity test concludes from it.
   bool containsZero() const;
 
   Interval& operator+=(const Interval& o);
@@ -76,7 +78,8 @@ extern template class Interval<Mpfr>;
 /// variable 0 fastest, `degrees` per axis) at the parameter intervals `t[0..p-1]`, in interval
 /// arithmetic: the same operations, in the same order and with the same result bit for bit, as
 /// with Interval<double>, but the rounding mode is switched once per call instead of three
-/// times per operation (the switches were most of the time of a leaf's enclosure).
+/// times per operation (the switches were most of the time of a leaf's enclosure). Where an
+/// overflow leaves a NaN end (inf - inf), the result is the whole line [-inf, inf].
 Interval<double> tensorDeCasteljauEnclosure(std::span<const double> coefficients,
                                             std::span<const int> degrees,
                                             const Interval<double>* t);
