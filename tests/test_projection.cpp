@@ -2,10 +2,12 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "framework/core/iteration.hpp"
 #include "framework/core/problem.hpp"
 #include "framework/core/system.hpp"
 #include "strategies/classification/classification.hpp"
@@ -385,3 +387,30 @@ TEMPLATE_TEST_CASE("classifyCells labels a grid from its projections", "[classif
   CHECK(classes[2] == ndc::CellClass::kFailed);
 }
 //! [classify-cells]
+
+TEMPLATE_TEST_CASE("Newton iterations share their stopping rules and step halving", "[projection]",
+                   NDC_SCALARS) {
+  using S = TestType;
+  ndc::test::PrecisionScope<S> precision;
+  const std::vector<S> start{S(3), S(-4)};
+  const ndc::IterationGuard<S> guard{std::span<const S>(start)};
+  // Divergence: beyond 1e4 (1 + |x0|) = 50000, or not finite.
+  CHECK_FALSE(guard.diverged(S(49999)));
+  CHECK(guard.diverged(S(50001)));
+  CHECK(guard.diverged(S(std::numeric_limits<double>::infinity())));
+  CHECK(guard.diverged(S(std::numeric_limits<double>::quiet_NaN())));
+  // Stagnation: a step within 16 eps (1 + |x|) of the iterate.
+  const S eps = ndc::ScalarTraits<S>::epsilon();
+  CHECK(ndc::IterationGuard<S>::stagnated(S(15) * eps * 2, S(1)));
+  CHECK_FALSE(ndc::IterationGuard<S>::stagnated(S(17) * eps * 2, S(1)));
+  // Step halving: the first accepted lambda, in order 1, 1/2, 1/4, ...; 0 when none is.
+  std::vector<S> tried;
+  const S lambda = ndc::halveStep<S>(10, [&](const S& t, int halving) {
+    tried.push_back(t);
+    CHECK(halving + 1 == static_cast<int>(tried.size()));
+    return t < S(0.2);
+  });
+  CHECK(lambda == S(0.125));
+  CHECK(tried.size() == 4);
+  CHECK(ndc::halveStep<S>(5, [](const S&, int) { return false; }) == S(0));
+}

@@ -13,6 +13,7 @@
 
 #include "framework/core/bernstein.hpp"
 #include "framework/core/cell_forms.hpp"
+#include "framework/core/iteration.hpp"
 #include "strategies/projection/newton.hpp"
 
 namespace ndc {
@@ -22,12 +23,6 @@ template <class S>
 using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
 template <class S>
 using Vector = Eigen::Matrix<S, Eigen::Dynamic, 1>;
-
-template <class S>
-bool isFinite(const S& v) {
-  using std::isfinite;
-  return isfinite(v);
-}
 
 /// Smallest and largest singular value of an m x n matrix, m <= n.
 template <class S>
@@ -313,9 +308,7 @@ bool Search<S>::locate(std::span<const S> start, Located<S>& result) {
   }
   if (!residual(x, v, g, jhat)) return false;
   S norm = g.norm();
-  S start0 = 0;
-  for (const S& c : x) start0 = max<S>(start0, abs(c));
-  const S divergence = S(1e4) * (1 + start0);
+  const IterationGuard<S> guard{std::span<const S>(x)};
   std::vector<S> delta(n_);
   for (int j = 0; j < n_; ++j) delta[j] = cbrt(eps_) * (domain_.hi[j] - domain_.lo[j]);
   Eigen::CompleteOrthogonalDecomposition<Matrix<S>> cod(rows, unknowns);
@@ -343,17 +336,15 @@ bool Search<S>::locate(std::span<const S> start, Located<S>& result) {
     step = -cod.solve(g);
 
     // Backtracking on |G|: the full Gauss-Newton step, else halves of it.
-    bool decreased = false;
-    S t = 1, trialNorm = 0;
-    for (int halving = 0; halving < 12 && !decreased; ++halving, t /= 2) {
-      for (int j = 0; j < n_; ++j) trial[j] = x[j] + t * step(j);
-      vTrial = v + t * step.tail(m_);
-      if (!residual(trial, vTrial, gTrial, jhatTrial)) continue;
+    S trialNorm = 0;
+    const S t = halveStep<S>(12, [&](const S& lambda, int) {
+      for (int j = 0; j < n_; ++j) trial[j] = x[j] + lambda * step(j);
+      vTrial = v + lambda * step.tail(m_);
+      if (!residual(trial, vTrial, gTrial, jhatTrial)) return false;
       trialNorm = gTrial.norm();
-      decreased = trialNorm < norm;
-      if (decreased) break;
-    }
-    if (!decreased) break;  // at the rounding floor (or a local minimum of |G|)
+      return trialNorm < norm;
+    });
+    if (t == 0) break;  // at the rounding floor (or a local minimum of |G|)
     S moved = 0, size = 0;
     for (int j = 0; j < n_; ++j) {
       moved = max<S>(moved, abs(trial[j] - x[j]));
@@ -365,8 +356,8 @@ bool Search<S>::locate(std::span<const S> start, Located<S>& result) {
     std::swap(g, gTrial);
     std::swap(jhat, jhatTrial);
     norm = trialNorm;
-    if (!(size <= divergence)) return false;
-    if (moved <= S(16) * eps_ * (1 + size) || slow >= 3) break;
+    if (guard.diverged(size)) return false;
+    if (IterationGuard<S>::stagnated(moved, size) || slow >= 3) break;
   }
   return accept(x, result);
 }

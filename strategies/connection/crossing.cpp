@@ -16,6 +16,7 @@
 #include "framework/core/bernstein.hpp"
 #include "framework/core/cell_forms.hpp"
 #include "framework/core/interval.hpp"
+#include "framework/core/iteration.hpp"
 #include "strategies/connection/cell_tree.hpp"
 #include "strategies/connection/certificate.hpp"
 
@@ -309,27 +310,24 @@ class FaceSolver {
       // residual is at rounding level.
       if (size <= 1e-3 * width && residualWithinRounding(y)) return true;
       // Damping: halve the step until it stays near the face and lowers the residual.
-      S lambda = 1;
-      bool accepted = false;
-      for (int halving = 0; halving < 30 && !accepted; ++halving, lambda /= 2) {
-        bool near = true;
+      const S lambda = halveStep<S>(30, [&](const S& t, int halving) {
         for (int j = 0; j < m_; ++j) {
-          trial[j] = y[j] - lambda * step(j);
-          near = near && trial[j] >= box.lo[j] - 2 * width && trial[j] <= box.hi[j] + 2 * width;
+          trial[j] = y[j] - t * step(j);
+          // Within two face widths (false for NaN).
+          if (!(trial[j] >= box.lo[j] - 2 * width && trial[j] <= box.hi[j] + 2 * width))
+            return false;
         }
-        if (!near) continue;
         const S rt = residual(trial);
         // Near the root the residual is at rounding level: accept the full step there.
-        if (rt < r || (halving == 0 && size <= 1e-6 * width)) {
-          y = trial;
-          r = rt;
-          accepted = true;
-        }
-      }
+        if (!(rt < r || (halving == 0 && size <= 1e-6 * width))) return false;
+        y = trial;
+        r = rt;
+        return true;
+      });
       // No step lowers the residual: converged iff it is at rounding level (the interval value
       // of F - c at y contains 0), as happens where the face Jacobian is nearly singular.
-      if (!accepted) return residualWithinRounding(y);
-      if (lambda * 2 * size <= 64 * eps * scale) return true;
+      if (lambda == 0) return residualWithinRounding(y);
+      if (lambda * size <= 64 * eps * scale) return true;
     }
     return false;
   }

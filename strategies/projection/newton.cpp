@@ -9,26 +9,9 @@
 #include <string>
 
 #include "framework/core/errors.hpp"
+#include "framework/core/iteration.hpp"
 
 namespace ndc {
-
-namespace {
-
-template <class S>
-bool isFinite(const S& v) {
-  using std::isfinite;
-  return isfinite(v);
-}
-
-template <class S>
-S normInf(std::span<const S> x) {
-  using std::abs;
-  S worst = 0;
-  for (const S& v : x) worst = std::max<S>(worst, abs(v));
-  return worst;
-}
-
-}  // namespace
 
 template <class S>
 NewtonProjection<S>::NewtonProjection(const System<S>& system, int maxIterations)
@@ -55,7 +38,7 @@ ProjectedPoint<S> NewtonProjection<S>::project(std::span<S> x) const {
   using Vector = Eigen::Matrix<S, Eigen::Dynamic, 1>;
   const int n = system_->n(), m = system_->m();
   const S eps = ScalarTraits<S>::epsilon();
-  const S divergence = S(1e4) * (1 + normInf<S>(x));
+  const IterationGuard<S> guard{std::span<const S>(x)};
   std::vector<S> f(m), jacobian(std::size_t(m) * n), tol(m);
   Matrix jac(m, n);
   Vector rhs(m);
@@ -110,9 +93,9 @@ ProjectedPoint<S> NewtonProjection<S>::project(std::span<S> x) const {
 
     // Divergence: the iterate ran away from where it started.
     const S size = normInf<S>(x);
-    if (!isFinite(size) || size > divergence) return result;
+    if (guard.diverged(size)) return result;
     // Stagnation at the rounding floor: accept within a slack of the residual tolerance.
-    if (stepNorm <= S(16) * eps * (1 + size)) {
+    if (IterationGuard<S>::stagnated(stepNorm, size)) {
       system_->evaluate(x, f, jacobian);
       result.converged = std::all_of(f.begin(), f.end(), isFinite<S>) && residualConverged(S(64));
       return result;
