@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <random>
 #include <span>
 #include <vector>
 
@@ -114,4 +116,54 @@ TEMPLATE_TEST_CASE(
   }
   CHECK(above > 0);
   CHECK(aboveExcluded == above);
+}
+
+TEST_CASE("The one-switch ||I - Y A|| kernel equals per-operation interval arithmetic",
+          "[certificate]") {
+  // Random interval matrices (m = 1..6 columns picked from n = m + 2), Y near their inverse or
+  // random, some entries overflowing: the kernel's bound is the per-operation bound, bit for bit.
+  std::mt19937 rng(2024);
+  std::uniform_real_distribution<double> u(-2, 2), w(0, 0.2);
+  int belowOne = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    const int m = 1 + trial % 6, n = m + 2;
+    std::vector<Interval<double>> a;
+    for (int k = 0; k < m * n; ++k) {
+      const double lo = u(rng) / 3;
+      a.emplace_back(lo, lo + w(rng) * (trial % 3 == 0 ? 0.01 : 1));
+    }
+    if (trial % 50 == 7)
+      a[0] =
+          Interval<double>(-std::numeric_limits<double>::max(), std::numeric_limits<double>::max());
+    std::vector<int> columns;
+    for (int j = 0; j < n && int(columns.size()) < m; ++j)
+      if (j % 3 != 1 || n - j <= m - int(columns.size())) columns.push_back(j);
+    std::vector<double> y(std::size_t(m) * m);
+    for (double& v : y) v = u(rng) * (trial % 2 ? 1 : 0.05);
+    for (int i = 0; i < m && trial % 2 == 0; ++i) y[std::size_t(i) * m + i] += 3;
+    // The per-operation reference.
+    double reference = 0;
+    for (int i = 0; i < m; ++i) {
+      Interval<double> row(0.0);
+      for (int j = 0; j < m; ++j) {
+        Interval<double> r(i == j ? 1.0 : 0.0);
+        for (int l = 0; l < m; ++l)
+          r -= Interval<double>(y[std::size_t(i) * m + l]) * a[std::size_t(l) * n + columns[j]];
+        row += Interval<double>(std::max(std::abs(r.lower()), std::abs(r.upper())));
+      }
+      reference = std::isnan(row.upper()) || std::isnan(reference)
+                      ? std::numeric_limits<double>::quiet_NaN()
+                      : std::max(reference, row.upper());
+    }
+    const double kernel = ndc::identityResidualNorm(m, y, a, std::size_t(n), columns);
+    INFO("trial " << trial << " m " << m);
+    if (std::isnan(reference))
+      CHECK(std::isnan(kernel));
+    else
+      CHECK(kernel == reference);
+    belowOne += kernel < 1;
+  }
+  // Both outcomes of the test are exercised.
+  CHECK(belowOne > 20);
+  CHECK(belowOne < 580);
 }

@@ -13,6 +13,7 @@
 
 #include <boost/numeric/interval.hpp>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -33,6 +34,13 @@ namespace bi = boost::numeric::interval_lib;
 /// operation (the rest of the program runs in round-to-nearest).
 using BoostInterval = boost::numeric::interval<
     double, bi::policies<bi::save_state<bi::rounded_arith_std<double>>, bi::checking_base<double>>>;
+/// Boost interval for kernels that set upward rounding once (bi::save_state<bi::rounded_arith_opp>
+/// around the kernel): Boost's "opposite" rounding computes every lower bound as
+/// -RU(-x op y) = RD(x op y), so each bound is exactly what the per-operation switching of
+/// BoostInterval gives for the same operations in the same order.
+using FastInterval = boost::numeric::interval<
+    double,
+    bi::policies<bi::save_state_nothing<bi::rounded_arith_opp<double>>, bi::checking_base<double>>>;
 
 // A double literal's value when it is exactly representable, found without big-number
 // arithmetic: the literal is M * 10^e with an integer significand M; it is a double iff
@@ -393,18 +401,12 @@ template class Interval<Mpfr>;
 Interval<double> tensorDeCasteljauEnclosure(std::span<const double> coefficients,
                                             std::span<const int> degrees,
                                             const Interval<double>* t) {
-  // Boost's "opposite" rounding computes every lower bound as -RU(-x op y) = RD(x op y), so
-  // under upward rounding, set once here, each bound is exactly what the per-operation
-  // switching of Interval<double> gives (the same operations in the same order).
-  using Fast =
-      boost::numeric::interval<double,
-                               bi::policies<bi::save_state_nothing<bi::rounded_arith_opp<double>>,
-                                            bi::checking_base<double>>>;
   constexpr std::size_t kMaxAxes = 16;
   if (degrees.size() > kMaxAxes) throw std::invalid_argument("tensorDeCasteljauEnclosure: axes");
   double tLower[kMaxAxes], tUpper[kMaxAxes];
   for (std::size_t a = 0; a < degrees.size(); ++a)
     tLower[a] = t[a].lower(), tUpper[a] = t[a].upper();
+  using Fast = FastInterval;
   thread_local std::vector<Fast> work;
   work.assign(coefficients.begin(), coefficients.end());
   double lower = 0, upper = 0;
@@ -437,6 +439,40 @@ Interval<double> tensorDeCasteljauEnclosure(std::span<const double> coefficients
   constexpr double kInf = std::numeric_limits<double>::infinity();
   if (std::isnan(lower) || std::isnan(upper)) return Interval<double>(-kInf, kInf);
   return Interval<double>(lower, upper);
+}
+
+double identityResidualNorm(int m, std::span<const double> y,
+                            std::span<const Interval<double>> matrix, std::size_t stride,
+                            std::span<const int> columns) {
+  // A's entries read once (no rounding involved), then row by row the operations of the
+  // per-operation reference, under one switch to upward rounding.
+  constexpr int kMaxM = 16;
+  if (m > kMaxM) throw std::invalid_argument("identityResidualNorm: m > 16");
+  double lower[kMaxM * kMaxM], upper[kMaxM * kMaxM];
+  for (int l = 0; l < m; ++l)
+    for (int j = 0; j < m; ++j) {
+      const Interval<double>& a = matrix[std::size_t(l) * stride + std::size_t(columns[j])];
+      lower[l * m + j] = a.lower();
+      upper[l * m + j] = a.upper();
+    }
+  const bi::save_state<bi::rounded_arith_opp<double>> upward;
+  double norm = 0;
+  for (int i = 0; i < m; ++i) {
+    FastInterval row(0.0);
+    for (int j = 0; j < m; ++j) {
+      FastInterval r(i == j ? 1.0 : 0.0);
+      for (int l = 0; l < m; ++l) {
+        FastInterval product(y[std::size_t(i) * m + l]);
+        product *= FastInterval(lower[l * m + j], upper[l * m + j]);
+        r -= product;
+      }
+      row += FastInterval(std::max<double>(std::abs(r.lower()), std::abs(r.upper())));
+    }
+    const double bound = row.upper();
+    if (std::isnan(bound)) return bound;
+    norm = std::max(norm, bound);
+  }
+  return norm;
 }
 
 }  // namespace ndc

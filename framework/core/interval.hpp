@@ -84,4 +84,14 @@ Interval<double> tensorDeCasteljauEnclosure(std::span<const double> coefficients
                                             std::span<const int> degrees,
                                             const Interval<double>* t);
 
+/// An upper bound on ||I - Y A||_inf in outward-rounded interval arithmetic (NaN when an entry
+/// overflowed), for a point matrix Y (m x m, row-major, m <= 16) and the interval matrix A whose
+/// entry (l, j) is `matrix[l * stride + columns[j]]` (m columns of a row-major matrix). Row i is
+/// sum_j |[delta_ij - sum_l Y_il A_lj]|: the same operations in the same order, bit for bit, as
+/// Interval<double> arithmetic, with one rounding-mode switch per call. A bound below 1 proves
+/// every real matrix in A regular (the graph certificate, strategies/connection/certificate.hpp).
+double identityResidualNorm(int m, std::span<const double> y,
+                            std::span<const Interval<double>> matrix, std::size_t stride,
+                            std::span<const int> columns);
+
 }  // namespace ndc

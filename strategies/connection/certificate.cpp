@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <numeric>
+#include <type_traits>
 
 namespace ndc {
 
@@ -120,7 +121,14 @@ bool GraphTest<S>::regular(std::span<const Interval<S>> jacobian,
   const Eigen::FullPivLU<Matrix> lu(mid);
   if (lu.rank() < m_) return false;
   const Matrix y = lu.inverse();
-  // || I - Y A ||_inf < 1, every entry enclosed with outward rounding.
+  // || I - Y A ||_inf < 1, every entry enclosed with outward rounding; in double, one kernel
+  // with one rounding-mode switch (the same bounds; the switches were most of this test's time).
+  if constexpr (std::is_same_v<S, double>) {
+    const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rows = y;
+    const double norm = identityResidualNorm(m_, std::span<const double>(rows.data(), rows.size()),
+                                             jacobian, std::size_t(n_), columns);
+    return norm < 1;
+  }
   for (int i = 0; i < m_; ++i) {
     I row(S(0));
     for (int j = 0; j < m_; ++j) {
