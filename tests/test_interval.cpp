@@ -4,6 +4,7 @@
 
 #include <limits>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -224,6 +225,24 @@ TEMPLATE_TEST_CASE("Interval: an overflow to NaN may contain zero", "[interval]"
   product *= Interval<S>(S(2), S(3));
   CHECK(product.containsZero());
   CHECK_FALSE(Interval<S>(S(1), inf).containsZero());
+}
+
+TEST_CASE("Interval: the one-switch scaled quotient equals per-operation arithmetic",
+          "[interval]") {
+  std::mt19937 rng(99);
+  std::uniform_real_distribution<double> u(-1e3, 1e3), w(0, 10);
+  for (int trial = 0; trial < 1000; ++trial) {
+    const double lo = u(rng) / 7, hi = lo + w(rng) / 3, factor = 1 + trial % 9,
+                 divisor = (trial % 2 ? 1 : -1) * (w(rng) + 1e-3) / 11;
+    const Interval<double> a(lo, hi);
+    const Interval<double> reference = (a * Interval<double>(factor)).dividedBy(divisor);
+    const Interval<double> fast = ndc::scaledQuotient(a, factor, divisor);
+    INFO("trial " << trial);
+    CHECK(fast.lower() == reference.lower());
+    CHECK(fast.upper() == reference.upper());
+    CHECK(a.midpoint() == (lo + hi) / 2);
+  }
+  CHECK_THROWS_AS(ndc::scaledQuotient(Interval<double>(1.0), 2, 0), std::domain_error);
 }
 
 TEST_CASE("Interval<Mpfr> uses the current precision", "[interval][mpfr]") {

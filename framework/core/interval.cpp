@@ -152,7 +152,13 @@ struct DoubleBackend {
   static void moveAssign(Value& v, Value& o) { v = o; }
   static double lower(const Value& v) { return v.lower(); }
   static double upper(const Value& v) { return v.upper(); }
-  static double midpoint(const Value& v) { return boost::numeric::median(v); }
+  // Boost's median switches to round-to-nearest and back; the program already runs in
+  // round-to-nearest outside the kernels below (every switch is scoped), so (l + u) / 2 is the
+  // same value without the switches.
+  static double midpoint(const Value& v) {
+    if (bi::detail::test_input(v)) return std::numeric_limits<double>::quiet_NaN();
+    return (v.lower() + v.upper()) / 2;
+  }
   static double width(const Value& v) { return boost::numeric::width(v); }
   static bool contains(const Value& v, double x) { return boost::numeric::in(x, v); }
   // A NaN end (inf - inf after an overflow) is no information, not an empty set: such an
@@ -473,6 +479,21 @@ double identityResidualNorm(int m, std::span<const double> y,
     norm = std::max(norm, bound);
   }
   return norm;
+}
+
+Interval<double> scaledQuotient(const Interval<double>& a, double factor, double divisor) {
+  if (divisor == 0) throw std::domain_error("Interval::dividedBy: division by zero");
+  FastInterval r(a.lower(), a.upper());
+  {
+    const bi::save_state<bi::rounded_arith_opp<double>> upward;
+    r *= FastInterval(factor);
+    r = r / divisor;
+  }
+  if (std::isnan(r.lower()) || std::isnan(r.upper())) {
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    return Interval<double>(-kInf, kInf);
+  }
+  return Interval<double>(r.lower(), r.upper());
 }
 
 }  // namespace ndc

@@ -84,6 +84,10 @@ Interval<double> tensorDeCasteljauEnclosure(std::span<const double> coefficients
                                             std::span<const int> degrees,
                                             const Interval<double>* t);
 
+/// `(a * [factor]).dividedBy(divisor)` with one rounding-mode switch: the same bounds bit for
+/// bit (the whole line where they would be NaN). Throws std::domain_error when divisor is 0.
+Interval<double> scaledQuotient(const Interval<double>& a, double factor, double divisor);
+
 /// An upper bound on ||I - Y A||_inf in outward-rounded interval arithmetic (NaN when an entry
 /// overflowed), for a point matrix Y (m x m, row-major, m <= 16) and the interval matrix A whose
 /// entry (l, j) is `matrix[l * stride + columns[j]]` (m columns of a row-major matrix). Row i is

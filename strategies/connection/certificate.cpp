@@ -28,7 +28,10 @@ Interval<S> derivativeHull(const Bernstein<S>& p, int axis, const S& margin) {
   // Two coefficient errors, and the rounding of the difference itself (below one margin).
   const S widen = 3 * margin;
   const Box<S>& box = p.domain();
-  return (I(lo - widen, hi + widen) * I(S(d))).dividedBy(box.hi[axis] - box.lo[axis]);
+  if constexpr (std::is_same_v<S, double>)  // one rounding-mode switch, the same bounds
+    return scaledQuotient(I(lo - widen, hi + widen), double(d), box.hi[axis] - box.lo[axis]);
+  else
+    return (I(lo - widen, hi + widen) * I(S(d))).dividedBy(box.hi[axis] - box.lo[axis]);
 }
 
 template <class S>
