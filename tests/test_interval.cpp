@@ -245,6 +245,44 @@ TEST_CASE("Interval: the one-switch scaled quotient equals per-operation arithme
   CHECK_THROWS_AS(ndc::scaledQuotient(Interval<double>(1.0), 2, 0), std::domain_error);
 }
 
+TEST_CASE("Interval: the one-switch Krawczyk operator equals per-operation arithmetic",
+          "[interval]") {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1), w(0, 0.1);
+  for (int trial = 0; trial < 400; ++trial) {
+    const int m = 1 + trial % 5;
+    std::vector<double> y(m), lo(m), hi(m), inverse(std::size_t(m) * m);
+    std::vector<Interval<double>> fy, jx;
+    for (int c = 0; c < m; ++c) {
+      y[c] = u(rng) / 3;
+      lo[c] = y[c] - w(rng) / 7;  // y inside [lo, hi], the differences inexact in general
+      hi[c] = y[c] + w(rng) / 7;
+      const double f = u(rng) * 1e-3;
+      fy.emplace_back(f, f + w(rng) * 1e-6);
+    }
+    for (double& v : inverse) v = u(rng) / 3;
+    for (int e = 0; e < m * m; ++e) {
+      const double a = u(rng) / 9;
+      jx.emplace_back(a, a + w(rng));
+    }
+    std::vector<double> kLower(m), kUpper(m);
+    ndc::krawczykOperator(m, y, inverse, fy, jx, lo, hi, kLower, kUpper);
+    for (int i = 0; i < m; ++i) {
+      using I = Interval<double>;
+      I k(y[i]);
+      for (int l = 0; l < m; ++l) k -= I(inverse[std::size_t(i) * m + l]) * fy[l];
+      for (int c = 0; c < m; ++c) {
+        I a(i == c ? 1.0 : 0.0);
+        for (int l = 0; l < m; ++l) a -= I(inverse[std::size_t(i) * m + l]) * jx[l * m + c];
+        k += a * (I(lo[c], hi[c]) - I(y[c]));
+      }
+      INFO("trial " << trial << " row " << i);
+      CHECK(kLower[i] == k.lower());
+      CHECK(kUpper[i] == k.upper());
+    }
+  }
+}
+
 TEST_CASE("Interval<Mpfr> uses the current precision", "[interval][mpfr]") {
   PrecisionScope<Mpfr> scope(100);
   auto coarse = Interval<Mpfr>(Mpfr(1)).dividedBy(Mpfr(3));

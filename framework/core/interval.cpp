@@ -496,4 +496,30 @@ Interval<double> scaledQuotient(const Interval<double>& a, double factor, double
   return Interval<double>(r.lower(), r.upper());
 }
 
+void krawczykOperator(int m, std::span<const double> y, std::span<const double> inverse,
+                      std::span<const Interval<double>> fy, std::span<const Interval<double>> jx,
+                      std::span<const double> lo, std::span<const double> hi,
+                      std::span<double> kLower, std::span<double> kUpper) {
+  constexpr int kMaxM = 16;
+  if (m > kMaxM) throw std::invalid_argument("krawczykOperator: m > 16");
+  // The interval inputs read once (no rounding involved).
+  FastInterval f[kMaxM], j[kMaxM * kMaxM];
+  for (int l = 0; l < m; ++l) f[l] = FastInterval(fy[l].lower(), fy[l].upper());
+  for (int e = 0; e < m * m; ++e) j[e] = FastInterval(jx[e].lower(), jx[e].upper());
+  const bi::save_state<bi::rounded_arith_opp<double>> upward;
+  FastInterval shift[kMaxM];  // X - y, outward
+  for (int c = 0; c < m; ++c) shift[c] = FastInterval(lo[c], hi[c]) - FastInterval(y[c]);
+  for (int i = 0; i < m; ++i) {
+    FastInterval k(y[i]);
+    for (int l = 0; l < m; ++l) k -= FastInterval(inverse[std::size_t(i) * m + l]) * f[l];
+    for (int c = 0; c < m; ++c) {
+      FastInterval a(i == c ? 1.0 : 0.0);
+      for (int l = 0; l < m; ++l) a -= FastInterval(inverse[std::size_t(i) * m + l]) * j[l * m + c];
+      k += a * shift[c];
+    }
+    kLower[i] = k.lower();
+    kUpper[i] = k.upper();
+  }
+}
+
 }  // namespace ndc

@@ -98,4 +98,15 @@ double identityResidualNorm(int m, std::span<const double> y,
                             std::span<const Interval<double>> matrix, std::size_t stride,
                             std::span<const int> columns);
 
+/// The Krawczyk operator K(X) = y - Y F(y) + (I - Y J(X)) (X - y) of an m x m system, in
+/// outward-rounded interval arithmetic with one rounding-mode switch per call (m <= 16): `y` the
+/// point (m), `inverse` Y (m x m, row-major), `fy` an enclosure of F(y) (m), `jx` J(X) (m x m,
+/// row-major), X = [lo, hi]. Writes K's rows to kLower and kUpper (NaN ends where an entry
+/// overflowed). The same operations in the same order as Interval<double> arithmetic, with X - y
+/// enclosed outward as [lo - y, hi - y].
+void krawczykOperator(int m, std::span<const double> y, std::span<const double> inverse,
+                      std::span<const Interval<double>> fy, std::span<const Interval<double>> jx,
+                      std::span<const double> lo, std::span<const double> hi,
+                      std::span<double> kLower, std::span<double> kUpper);
+
 }  // namespace ndc

@@ -10,6 +10,7 @@
 #include <map>
 #include <numeric>
 #include <sstream>
+#include <type_traits>
 #include <unordered_map>
 #include <vector>
 
@@ -437,19 +438,39 @@ class FaceSolver {
       fy.push_back(system_.equations()[i].template evaluate<S>(std::span<const I>(xi)) -
                    I(level_[i]));
     }
+    krawczykOperator(box, y, inverse, fy);
     bool unique = true;
+    for (int i = 0; i < m_; ++i) {
+      if (kUpper_[i] < box.lo[i] || kLower_[i] > box.hi[i]) return Krawczyk::kNone;
+      if (!(kLower_[i] > box.lo[i] && kUpper_[i] < box.hi[i])) unique = false;
+    }
+    return unique ? Krawczyk::kUnique : Krawczyk::kUnknown;
+  }
+
+  /// K(X) = y - Y F(y) + (I - Y J(X)) (X - y), row i into kLower_[i], kUpper_[i]; in double one
+  /// kernel with one rounding-mode switch (ndc::krawczykOperator), the same operations.
+  void krawczykOperator(const Box<S>& box, const std::vector<S>& y, const Matrix<S>& inverse,
+                        const std::vector<Interval<S>>& fy) {
+    using I = Interval<S>;
+    kLower_.resize(m_);
+    kUpper_.resize(m_);
+    if constexpr (std::is_same_v<S, double>) {
+      const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rows = inverse;
+      ndc::krawczykOperator(m_, y, std::span<const double>(rows.data(), rows.size()), fy, jx_,
+                            box.lo, box.hi, kLower_, kUpper_);
+      return;
+    }
     for (int i = 0; i < m_; ++i) {
       I k(y[i]);
       for (int l = 0; l < m_; ++l) k -= I(inverse(i, l)) * fy[l];
       for (int j = 0; j < m_; ++j) {
         I c(S(i == j ? 1 : 0));
         for (int l = 0; l < m_; ++l) c -= I(inverse(i, l)) * jx_[std::size_t(l) * m_ + j];
-        k += c * I(box.lo[j] - y[j], box.hi[j] - y[j]);
+        k += c * (I(box.lo[j], box.hi[j]) - I(y[j]));  // X - y, outward
       }
-      if (k.upper() < box.lo[i] || k.lower() > box.hi[i]) return Krawczyk::kNone;
-      if (!(k.lower() > box.lo[i] && k.upper() < box.hi[i])) unique = false;
+      kLower_[i] = k.lower();
+      kUpper_[i] = k.upper();
     }
-    return unique ? Krawczyk::kUnique : Krawczyk::kUnknown;
   }
 
   const System<S>& system_;
@@ -460,6 +481,7 @@ class FaceSolver {
   std::vector<int> free_;
   std::vector<S> f_, jacobian_;
   std::vector<Interval<S>> jx_;
+  std::vector<S> kLower_, kUpper_;  ///< the Krawczyk operator's rows
   std::span<const S> margins_;
   bool certain_ = true;
   bool proven_ = true;
