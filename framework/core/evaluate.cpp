@@ -74,8 +74,8 @@ T leafValue(const PiecewiseBernstein& leaf, std::span<const T> x) {
 }
 
 /// Per-evaluation scratch: the stack (stride values per slot) and the values of the distinct
-/// leaves (stride per leaf, computed on first use). Reused per thread for double, so the Newton
-/// loop and the bounding tests do not allocate once warm.
+/// leaves (stride per leaf, computed on first use). Reused per thread for double and
+/// Interval<double>, so the Newton loop and the interval tests do not allocate once warm.
 template <class T>
 struct Workspace {
   std::vector<T> stack;
@@ -93,8 +93,10 @@ struct Workspace {
 
 template <class T, class F>
 decltype(auto) withWorkspace(F&& f) {
-  if constexpr (std::is_same_v<T, double>) {
-    thread_local Workspace<double> work;
+  // Per thread for double and Interval<double> (no evaluation re-enters another: leaves and
+  // constants are not tapes); Mpfr values carry their precision, so they are made per call.
+  if constexpr (std::is_same_v<T, double> || std::is_same_v<T, Interval<double>>) {
+    thread_local Workspace<T> work;
     return f(work);
   } else {
     Workspace<T> work;
