@@ -452,9 +452,10 @@ double identityResidualNorm(int m, std::span<const double> y,
                             std::span<const int> columns) {
   // A's entries read once (no rounding involved), then row by row the operations of the
   // per-operation reference, under one switch to upward rounding.
-  constexpr int kMaxM = 16;
-  if (m > kMaxM) throw std::invalid_argument("identityResidualNorm: m > 16");
-  double lower[kMaxM * kMaxM], upper[kMaxM * kMaxM];
+  // Per-thread scratch: no allocation once warm, any m.
+  thread_local std::vector<double> lower, upper;
+  lower.resize(std::size_t(m) * m);
+  upper.resize(std::size_t(m) * m);
   for (int l = 0; l < m; ++l)
     for (int j = 0; j < m; ++j) {
       const Interval<double>& a = matrix[std::size_t(l) * stride + std::size_t(columns[j])];
@@ -500,14 +501,16 @@ void krawczykOperator(int m, std::span<const double> y, std::span<const double> 
                       std::span<const Interval<double>> fy, std::span<const Interval<double>> jx,
                       std::span<const double> lo, std::span<const double> hi,
                       std::span<double> kLower, std::span<double> kUpper) {
-  constexpr int kMaxM = 16;
-  if (m > kMaxM) throw std::invalid_argument("krawczykOperator: m > 16");
-  // The interval inputs read once (no rounding involved).
-  FastInterval f[kMaxM], j[kMaxM * kMaxM];
+  // The interval inputs read once (no rounding involved), into per-thread scratch: no
+  // allocation once warm, any m.
+  thread_local std::vector<FastInterval> f, j, shift;
+  f.resize(std::size_t(m));
+  j.resize(std::size_t(m) * m);
+  shift.resize(std::size_t(m));
   for (int l = 0; l < m; ++l) f[l] = FastInterval(fy[l].lower(), fy[l].upper());
   for (int e = 0; e < m * m; ++e) j[e] = FastInterval(jx[e].lower(), jx[e].upper());
   const bi::save_state<bi::rounded_arith_opp<double>> upward;
-  FastInterval shift[kMaxM];  // X - y, outward
+  // X - y, outward.
   for (int c = 0; c < m; ++c) shift[c] = FastInterval(lo[c], hi[c]) - FastInterval(y[c]);
   for (int i = 0; i < m; ++i) {
     FastInterval k(y[i]);
