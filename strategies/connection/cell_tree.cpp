@@ -25,6 +25,7 @@ std::int32_t CellTree::addLeaf(int level, std::span<const std::int32_t> index, b
   index_.insert(index_.end(), index.begin(), index.end());
   active_.push_back(1);
   solution_.push_back(solution ? 1 : 0);
+  solutionLeaves_ += solution ? 1 : 0;
   return leaf;
 }
 
@@ -35,6 +36,7 @@ std::int32_t CellTree::refine(std::int32_t leaf, const std::vector<std::uint8_t>
   leaves_[level - base_].erase(key);
   internal_[level - base_].insert(key);
   active_[leaf] = 0;
+  solutionLeaves_ -= solution_[leaf];
   const std::vector<std::int32_t> parent(index(leaf).begin(), index(leaf).end());
   std::vector<std::int32_t> child(n_);
   const auto first = static_cast<std::int32_t>(level_.size());

@@ -56,6 +56,8 @@ class CellTree {
   /// Whether the bounding could not exclude the leaf (a solution cell); touch cells and
   /// excluded children are not.
   bool solution(std::int32_t leaf) const { return solution_[leaf] != 0; }
+  /// Active leaves the bounding could not exclude: the leaves whose certificates cost work.
+  std::size_t solutionLeaves() const { return solutionLeaves_; }
   /// The solution-cell number of a base leaf (its number in the pipeline's cells), else -1.
   std::int32_t baseCell(std::int32_t leaf) const {
     return leaf < baseCells_ && level_[leaf] == base_ ? leaf : -1;
@@ -71,6 +73,7 @@ class CellTree {
   std::vector<std::int32_t> index_;
   std::vector<std::uint8_t> active_, solution_;
   std::int32_t baseCells_ = 0;
+  std::size_t solutionLeaves_ = 0;
 };
 
 }  // namespace ndc

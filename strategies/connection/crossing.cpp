@@ -711,16 +711,7 @@ class AdaptiveCrossing {
       if (k_ == 1) fixedAxes_.push_back({a, -1});
       for (int b = a + 1; k_ == 2 && b < n_; ++b) fixedAxes_.push_back({a, b});
     }
-    // Refinement stops before this many leaves: thin features need a few times the base
-    // cells (genus2 at depth 5: 8x, the thin torus at depth 3: 50x, so at least 65536 in
-    // R^3); where refinement cannot succeed (tangency along a curve, graph tests that fail on
-    // every cell) it bounds the cost. A leaf costs more and a refinement makes 2^n of them as
-    // n grows, so the floor shrinks by 16 per dimension, to 4096 from R^4 on.
-    maxLeaves_ = std::max<std::size_t>(16 * in.cells.size(),
-                                       std::size_t{1} << std::max(12, 16 - 4 * (grid_.n - 3)));
-    // A chord error the user asks for (--tolerance) may need many more: up to 2^22 leaves
-    // (a few hundred MB); the CLI warns when the tolerance is not reached.
-    if (in.tolerance > 0) maxLeaves_ = std::max<std::size_t>(maxLeaves_, std::size_t{1} << 22);
+    setBudget(in.cells.size(), in.tolerance > 0);
   }
 
   /// The certified mesh, refining where the certificate fails. When refinement does not reach a
@@ -740,6 +731,35 @@ class AdaptiveCrossing {
         std::to_string(refinedDefects) +
         " non-manifold edges or branch vertices, so the base grid's mesh is kept";
     return base;
+  }
+
+  /// The refinement budget (docs/certificate.md "Adaptive refinement"). Solution leaves, those
+  /// the bounding cannot exclude, carry the cost of certification: thin features need a few
+  /// times the base cells (genus2 at depth 5: 8x, the thin torus at depth 3: 50x, so at least
+  /// 65536 in R^3); where refinement cannot succeed (tangency along a curve through grid
+  /// vertices) it bounds the cost. A leaf costs more as n grows, so the floor shrinks by 16 per
+  /// dimension, to 4096 from R^4 on. The children the bounding excludes cost one bounding test
+  /// each, but a refinement makes 2^n of them (a curve in R^7: 128 per refined cell, about 2 of
+  /// them solution leaves), so they get their own, wider budget: 4 times the first, at most
+  /// 2^22 leaves (memory). A chord error the user asks for (--tolerance) may need many more
+  /// solution leaves: up to 2^22 (a few hundred MB); the CLI warns when it is not reached.
+  void setBudget(std::size_t baseCells, bool tolerance) {
+    maxSolutionLeaves_ = std::max<std::size_t>(
+        16 * baseCells, std::size_t{1} << std::max(12, 16 - 4 * (grid_.n - 3)));
+    if (tolerance) maxSolutionLeaves_ = std::max<std::size_t>(maxSolutionLeaves_, kMaxLeaves);
+    maxLeaves_ = std::min<std::size_t>(4 * maxSolutionLeaves_, kMaxLeaves);
+  }
+
+  /// Whether refining `refine` leaves stays within the budget: the leaves it adds at most, and
+  /// the solution leaves it adds, predicted from the solution children per refined leaf so far
+  /// (2^k before the first refinement: a k-manifold through a cell meets about 2^k children).
+  bool withinBudget(std::size_t refine) const {
+    const std::size_t children = refine << n_;
+    const double perLeaf =
+        refined_ > 0 ? double(solutionChildren_) / double(refined_) : double(1 << k_);
+    const auto predicted = static_cast<std::size_t>(double(refine) * perLeaf);
+    return tree_.size() + children <= maxLeaves_ &&
+           tree_.solutionLeaves() + predicted <= maxSolutionLeaves_;
   }
 
   /// Edges of more than two triangles (k = 2) or vertices of more than two edges (k = 1).
@@ -1627,6 +1647,7 @@ class AdaptiveCrossing {
     failure_.clear();
     trouble_.clear(), hasTrouble_.clear();
     refined_ = 0;
+    solutionChildren_ = 0;
     budgetSpent_ = false;
     while (true) {
       std::fill(unproven_.begin(), unproven_.end(), 0);
@@ -1645,13 +1666,16 @@ class AdaptiveCrossing {
       // Certified (or as far as it goes): then the leaves the chord error asks for.
       if (refine.empty() && in_.tolerance > 0 && refining_) refine = chordLeaves();
       if (refine.empty() || !in_.refine || !refining_) return degenerate;
-      if (tree_.size() + refine.size() * (std::size_t{1} << n_) > maxLeaves_) {
+      if (!withinBudget(refine.size())) {
         budgetSpent_ = true;
         return degenerate;
       }
       for (std::int32_t c : refine) {
         const Box<double> box = cellBox(tree_.grid(tree_.level(c)), grid_.domain, tree_.index(c));
-        tree_.refine(c, in_.refine(box));
+        const std::vector<std::uint8_t> children = in_.refine(box);
+        solutionChildren_ += static_cast<std::size_t>(
+            std::count_if(children.begin(), children.end(), [](std::uint8_t f) { return f != 0; }));
+        tree_.refine(c, children);
         ++refined_;
       }
       grow();
@@ -1788,7 +1812,10 @@ class AdaptiveCrossing {
         why << "; " << stuck << " next to crossings no refinement separates (M touches a grid "
             << "plane, or a singular point)";
       }
-      if (budgetSpent_) why << "; refinement stopped at " << maxLeaves_ << " leaves";
+      if (budgetSpent_) {
+        why << "; refinement stopped at its budget of " << maxSolutionLeaves_
+            << " solution leaves and " << maxLeaves_ << " leaves";
+      }
     } else if (degenerate > 0) {
       why << degenerate << " crossings within rounding of a face boundary";
     }
@@ -1978,8 +2005,10 @@ class AdaptiveCrossing {
   std::vector<std::vector<CellKey>> blockEmpties_;  ///< its base cells the bounding excluded
   std::vector<std::vector<Failure>> blockSaved_;
   std::int64_t refined_ = 0;
-  std::size_t maxLeaves_ = 0;
-  bool refining_ = true;  ///< false: certify the base grid only (run's fallback)
+  static constexpr std::size_t kMaxLeaves = std::size_t{1} << 22;
+  std::size_t maxLeaves_ = 0, maxSolutionLeaves_ = 0;
+  std::size_t solutionChildren_ = 0;  ///< solution children of the leaves refined so far
+  bool refining_ = true;              ///< false: certify the base grid only (run's fallback)
   bool budgetSpent_ = false;
 };
 
