@@ -275,10 +275,10 @@ TEST_CASE("cli: usage errors exit 2 with one line", "[cli]") {
   checkBadInput(ndcontour("solve " + valid + " --jitter 99999999999999999999999"), {"--jitter"});
   checkBadInput(ndcontour("solve " + valid + " --out " + valid), {"--out", "not a directory"});
 
-  // The depth must fit the packed cell index: n * depth <= 64.
+  // The depth must fit the packed cell index: n * depth <= 128.
   const fs::path r8 = problemsDir() / "circle-r8.toml";
-  checkBadInput(ndcontour("solve " + quoted(r8.string()) + " --depth 9"),
-                {"--depth 9", r8.string(), "depth <= 8"});
+  checkBadInput(ndcontour("solve " + quoted(r8.string()) + " --depth 17"),
+                {"--depth 17", r8.string(), "depth <= 16"});
 }
 
 TEST_CASE("cli: a valid solve runs the pipeline and writes its outputs", "[cli]") {

@@ -437,9 +437,49 @@ TEMPLATE_TEST_CASE("subdivision edge cases", "[subdivision]", NDC_SCALARS) {
         "five");
     const auto b5 = ndc::createBounding<TestType>("interval", five, five.domainAs<TestType>());
     CHECK_THROWS_AS(
-        ndc::subdivide<TestType>(b5, ndc::BinarySubdivision{}, Grid{5, 13, five.domain}),
+        ndc::subdivide<TestType>(b5, ndc::BinarySubdivision{}, Grid{5, 26, five.domain}),
         ndc::InputError);
   }
+}
+
+TEST_CASE("cell keys pack and unpack every grid that fits, past 64 bits", "[subdivision]") {
+  // Seeded random multi-indices on grids of n * depth up to 128 bits: pack then unpack gives
+  // the index back, neighbours are the keys of the shifted indices, distinct indices give
+  // distinct keys, and the hash of a key below 2^64 is the key (as before the 128-bit keys).
+  std::mt19937_64 rng(20261203);
+  for (const auto& [n, depth] : std::vector<std::pair<int, int>>{
+           {2, 30}, {3, 21}, {3, 22}, {8, 8}, {8, 9}, {8, 16}, {20, 6}, {30, 4}, {64, 2}}) {
+    INFO("n = " << n << ", depth = " << depth);
+    REQUIRE(Grid::fits(n, depth));
+    const Grid grid{n, depth,
+                    ndc::Box<double>{std::vector<double>(n, -1), std::vector<double>(n, 1)}};
+    std::uniform_int_distribution<std::int32_t> pick(0, std::int32_t(grid.cellsPerAxis() - 1));
+    std::set<CellKey> seen;
+    std::set<std::vector<std::int32_t>> indices;
+    for (int trial = 0; trial < 200; ++trial) {
+      std::vector<std::int32_t> index(n), back(n);
+      for (auto& i : index) i = pick(rng);
+      const CellKey key = grid.pack(index);
+      grid.unpack(key, back);
+      CHECK(back == index);
+      const int axis = trial % n;
+      if (index[axis] + 1 < grid.cellsPerAxis()) {
+        std::vector<std::int32_t> up = index;
+        ++up[axis];
+        CHECK(grid.neighbour(key, axis, +1) == grid.pack(up));
+        CHECK(grid.neighbour(grid.pack(up), axis, -1) == key);
+      }
+      seen.insert(key);
+      indices.insert(index);
+    }
+    CHECK(seen.size() == indices.size());
+  }
+  CHECK(ndc::CellKeyHash{}(CellKey{123456789}) == std::size_t{123456789});
+  CHECK_FALSE(Grid::fits(8, 17));
+  CHECK_FALSE(Grid::fits(30, 5));
+  CHECK_FALSE(Grid::fits(65, 1));
+  CHECK(Grid::deepestFor(8) == 16);
+  CHECK(Grid::deepestFor(3) == 30);
 }
 
 //! [strategy-names]

@@ -94,7 +94,7 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
                   "Deepest level adaptive refinement may reach where a cell's topology "
                   "certificate fails (default: depth + " +
                       std::to_string(kDefaultRefinementLevels) +
-                      ", or less where n * level > 64; equal to --depth: no refinement)")
+                      ", or less where n * level > 128; equal to --depth: no refinement)")
       ->type_name("L");
   addStrategyOption(solve, "--bounding", s.bounding, boundingRegistry());
   addStrategyOption(solve, "--subdivision", s.subdivision, subdivisionRegistry());

@@ -39,7 +39,7 @@ class CellForms {
   Box<S> domain_;
   int rootLevel_;
   std::vector<std::int32_t> patch_;  ///< scratch: the patch index of the current request
-  std::unordered_map<CellKey, std::vector<Bernstein<S>>> forms_;
+  CellMap<std::vector<Bernstein<S>>> forms_;
 };
 
 extern template class CellForms<double>;

@@ -9,7 +9,7 @@ CellKey Grid::pack(std::span<const std::int32_t> index) const {
 }
 
 void Grid::unpack(CellKey key, std::span<std::int32_t> index) const {
-  const CellKey mask = (depth >= 64) ? ~CellKey{0} : ((CellKey{1} << depth) - 1);
+  const CellKey mask = (CellKey{1} << depth) - 1;  // depth <= 30
   for (int j = 0; j < n; ++j) {
     index[j] = static_cast<std::int32_t>(key & mask);
     key >>= depth;

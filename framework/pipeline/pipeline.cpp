@@ -554,11 +554,12 @@ void checkDepths(int depth, int maxDepth, int n, std::string_view file) {
     if (level < kMinDepth || level > kMaxDepth)
       throw UsageError(given + " is out of range (accepted: " + std::to_string(kMinDepth) + ".." +
                        std::to_string(kMaxDepth) + ")");
-    // Cells are keyed by a packed 64-bit multi-index of n * level bits (grid.hpp).
+    // Cells are keyed by a packed 128-bit multi-index of n * level bits (grid.hpp).
     if (n > 0 && !Grid::fits(n, level))
-      throw UsageError(given + " is too deep for " + std::to_string(n) +
-                       " variables: n * level must be at most 64 (accepted: " + option +
-                       " <= " + std::to_string(std::min(kMaxDepth, 64 / n)) + ")");
+      throw UsageError(given + " is too deep for " + std::to_string(n) + " variables: n * level " +
+                       "must be at most " + std::to_string(kCellKeyBits) + ", with at most " +
+                       std::to_string(kMaxCellKeyAxes) + " variables (accepted: " + option +
+                       " <= " + std::to_string(std::min(kMaxDepth, Grid::deepestFor(n))) + ")");
   };
   check("--depth", depth);
   if (maxDepth == 0) return;

@@ -30,7 +30,7 @@ inline constexpr unsigned kDefaultMpfrPrecision = 128;
 
 /// The one check of a run's levels: `depth` (--depth) and `maxDepth` (--max-depth, 0 for the
 /// default) must lie in kMinDepth..kMaxDepth, with depth <= maxDepth, and, when the number of
-/// variables n is known (n > 0), fit the grid's 64-bit cell keys (n * level <= 64). Throws
+/// variables n is known (n > 0), fit the grid's 128-bit cell keys (n * level <= 128). Throws
 /// UsageError with one line naming the option, prefixed by `file` when it is not empty. The
 /// command line calls it before reading the problem (n = 0) and with it; runPipeline before
 /// any work.
@@ -58,7 +58,7 @@ RunResult runPipeline(const Problem& problem, const Settings& settings,
 inline constexpr int kDefaultRefinementLevels = 10;
 
 /// The default `--max-depth`: depth + kDefaultRefinementLevels, or less where the cell keys
-/// of the 2^n-tree would not fit (n * level <= 64).
+/// of the 2^n-tree would not fit (n * level <= 128).
 int defaultMaxDepth(int n, int depth);
 
 /// The maximum level of refinement of a run: settings.maxDepth, or the default when it is 0;

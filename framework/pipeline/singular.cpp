@@ -131,7 +131,7 @@ class Search {
   S width_ = 0;
   std::vector<S> inLo_, inHi_, cellWidth_;
   std::vector<S> scale_;  // s_i
-  std::unordered_map<CellKey, Block<S>> blocks_;
+  CellMap<Block<S>> blocks_;
   // Scratch.
   std::vector<S> f_, jac_, tol_;
 };

@@ -67,8 +67,8 @@ class CellTree {
  private:
   int n_, base_, maxLevel_;
   std::vector<Grid> grids_;
-  std::vector<std::unordered_map<CellKey, std::int32_t>> leaves_;  // per level - base
-  std::vector<std::unordered_set<CellKey>> internal_;              // per level - base
+  std::vector<CellMap<std::int32_t>> leaves_;  // per level - base
+  std::vector<CellSet> internal_;              // per level - base
   std::vector<std::int8_t> level_;
   std::vector<std::int32_t> index_;
   std::vector<std::uint8_t> active_, solution_;

@@ -1995,7 +1995,7 @@ class AdaptiveCrossing {
   std::vector<std::uint8_t> hasTrouble_;
   std::vector<FaceRef> unprovenFaces_;                 ///< recordUnproven
   std::vector<std::vector<std::int32_t>> unprovenOf_;  ///< per leaf: its unproven faces
-  std::unordered_map<CellKey, std::vector<std::int32_t>> unprovenOfEmpty_;  ///< per empty cell
+  CellMap<std::vector<std::int32_t>> unprovenOfEmpty_;  ///< per empty cell
   std::vector<std::vector<std::int32_t>> blocks_;  ///< the leaves of certified blocks
   std::vector<std::int32_t> block_;                ///< per leaf: its block, or -1
   /// Per block: its lower corner and level, and its leaves' failures before it (to dissolve

@@ -126,7 +126,8 @@ SolutionCells subdivide(const Bounding<S>& bounding, const Subdivision& subdivis
                         const Grid& grid, const Progress& progress, std::int64_t maxCells) {
   if (!Grid::fits(grid.n, grid.depth) || grid.depth < 0 || grid.n < 1)
     throw InputError("depth " + std::to_string(grid.depth) + " is too large for " +
-                     std::to_string(grid.n) + " variables (n * depth must be at most 64)");
+                     std::to_string(grid.n) +
+                     " variables (n * depth must be at most 128, n at most 64)");
   const int n = std::visit([](const auto& b) { return b.dim(); }, bounding);
   if (n != grid.n)
     throw std::invalid_argument("subdivide: the grid has " + std::to_string(grid.n) +

@@ -74,7 +74,7 @@ Subdivision createSubdivision(std::string_view spec);
 /// pair of bounding states per depth plus the output, so it grows with the number of solution
 /// cells, not with 2^(n L). `progress`, when set, receives ("subdivision", share of the domain's
 /// volume done) at most about 100 times. Throws InputError when the grid does not fit a CellKey
-/// (the packed cell index needs n * L <= 64), std::invalid_argument when grid and bounding disagree
+/// (the packed cell index needs n * L <= 128), std::invalid_argument when grid and bounding disagree
 /// on n. `maxCells` > 0 is a budget: when more solution cells are found the traversal stops with
 /// ndc::CellBudgetExceeded (a zero set of a higher dimension than the problem's k).
 template <class S>
