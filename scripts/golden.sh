@@ -2,6 +2,8 @@
 # Golden outputs for refactoring: records the outputs of a fixed set of solves (every bounding
 # model, both scalars, curves and surfaces, applications) and later compares a new build's
 # outputs with them byte for byte. summary.json is compared without its wall times (timing_s).
+# Every solve writes ASCII PLY and cells.csv (--ascii --cells) when the binary has those options
+# (builds before them always wrote both), so that records of older builds stay comparable.
 #
 #   scripts/golden.sh record DIR [BINARY]   # before the change
 #   scripts/golden.sh compare DIR [BINARY]  # after it: exit status 1 on any difference
@@ -18,6 +20,9 @@ if [[ "$mode" != record && "$mode" != compare ]] || [[ -z "$dir" ]]; then
   exit 2
 fi
 [[ -x "$bin" ]] || { echo "golden.sh: no executable $bin (run scripts/build.sh)" >&2; exit 2; }
+help="$("$bin" solve --help)"
+text_outputs=""
+if [[ "$help" == *--ascii* && "$help" == *--cells* ]]; then text_outputs="--ascii --cells"; fi
 
 # name | problem | options
 runs=(
@@ -55,7 +60,7 @@ for entry in "${runs[@]}"; do
   [[ "$mode" == compare ]] && target="$dir/$name.new"
   rm -rf "$target"
   # shellcheck disable=SC2086
-  if ! "$bin" solve "$root/experiments/problems/$problem.toml" $options --out "$target" >/dev/null 2>&1; then
+  if ! "$bin" solve "$root/experiments/problems/$problem.toml" $options $text_outputs --out "$target" >/dev/null 2>&1; then
     echo "golden.sh: $name: the solve failed" >&2
     failed=1
     continue
@@ -63,7 +68,7 @@ for entry in "${runs[@]}"; do
   strip_times "$target/summary.json" >"$target/summary.stripped"
   [[ "$mode" == record ]] && { echo "recorded $name"; continue; }
   same=1
-  for f in mesh.ply cells.csv singular.csv summary.stripped; do
+  for f in mesh.ply cells.csv singular.csv input.ply ruled.ply summary.stripped; do
     [[ -e "$dir/$name/$f" || -e "$target/$f" ]] || continue
     if ! cmp -s "$dir/$name/$f" "$target/$f"; then
       echo "DIFFERS $name/$f"

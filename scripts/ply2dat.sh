@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# ply2dat.sh: ASCII PLY (as ndcontour writes it: mesh.ply, input.ply, ruled.ply) -> gnuplot data.
+# ply2dat.sh: PLY (as ndcontour writes it: mesh.ply, input.ply, ruled.ply) -> gnuplot data. A
+# binary PLY (the default of solve) is read through scripts/ply2ascii.py (needs python3); an ASCII
+# one (solve --ascii) directly.
 #
 #   scripts/ply2dat.sh [--props X,Y,Z] [--pm3d] [--part P] FILE.ply
 #       the simplices (triangles or segments) of FILE in the vertex properties X Y Z (default
@@ -35,12 +37,33 @@ if [[ $# -ne 1 || ! -r "$1" ]]; then
 fi
 if [[ "$mode" == "ruling" ]]; then props="x,y,z,x2,y2,z2"; fi
 
-awk -v props="$props" -v mode="$mode" -v every="$every" -v part="$part" '
-  function fail(msg) { print "ply2dat.sh: " FILENAME ": " msg > "/dev/stderr"; bad = 1; exit 2 }
+# Whether the header's format line says binary (read up to end_header only).
+is_binary() {
+  local line n=0
+  while IFS= read -r line && ((n++ < 1000)); do
+    [[ "$line" == "format binary"* ]] && return 0
+    [[ "$line" == end_header* ]] && return 1
+  done <"$1"
+  return 1
+}
+file="$1"
+ascii_file="$1"
+if is_binary "$file"; then
+  if ! command -v python3 >/dev/null; then
+    echo "ply2dat.sh: $file: reading binary PLY needs python3 (Debian package 'python3')" >&2
+    exit 2
+  fi
+  ascii_file="$(mktemp)"
+  trap 'rm -f "$ascii_file"' EXIT
+  python3 "$(dirname "${BASH_SOURCE[0]}")/ply2ascii.py" "$file" >"$ascii_file" || exit 2
+fi
+
+awk -v file="$file" -v props="$props" -v mode="$mode" -v every="$every" -v part="$part" '
+  function fail(msg) { print "ply2dat.sh: " file ": " msg > "/dev/stderr"; bad = 1; exit 2 }
   BEGIN { header = 1; nwant = split(props, want, ","); nelem = 0 }
   # Header: the elements in order, their counts and the vertex properties.
   header && NR == 1 && $1 != "ply" { fail("not a PLY file") }
-  header && $1 == "format" && $2 != "ascii" { fail("only ASCII PLY is read") }
+  header && $1 == "format" && $2 != "ascii" { fail("format " $2 " is not read") }
   header && $1 == "element" { name[++nelem] = $2; count[nelem] = $3; nprop[nelem] = 0; next }
   header && $1 == "property" { nprop[nelem]++; if (name[nelem] == "vertex") col[$NF] = nprop[nelem]; next }
   header && $1 == "end_header" {
@@ -80,4 +103,4 @@ awk -v props="$props" -v mode="$mode" -v every="$every" -v part="$part" '
   }
   function pt(k) { print coord[k, 1], coord[k, 2], coord[k, 3] }
   END { if (!bad && header) fail("no end_header") }
-' "$1"
+' "$ascii_file"

@@ -7,7 +7,8 @@
 # summary.json). The application is read from summary.json's "application" field, else from the
 # "problem" name's prefix (convex-hull-*, bisector-*, ...); then
 #   gnuplot -e "dir='RESULT_DIR'" experiments/gnuplot/APPLICATION.gp
-# writes RESULT_DIR/APPLICATION.png. Needs gnuplot (Debian gnuplot-nox, scripts/setup.sh).
+# writes RESULT_DIR/APPLICATION.png. Needs gnuplot (Debian gnuplot-nox, scripts/setup.sh) and,
+# for binary PLY (the default of solve; scripts/ply2dat.sh reads it), python3.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 if [[ $# -ne 1 || ! -f "$1/summary.json" ]]; then
@@ -30,6 +31,10 @@ if [[ -z "$app" || ! -f "$script" ]]; then
 fi
 if ! command -v gnuplot >/dev/null; then
   echo "render.sh: gnuplot is missing: install the Debian package 'gnuplot-nox'" >&2
+  exit 2
+fi
+if ! command -v python3 >/dev/null && ! grep -a -q '^format ascii' <(head -c 200 "$dir/mesh.ply"); then
+  echo "render.sh: python3 is missing (it reads binary PLY): install the Debian package 'python3'" >&2
   exit 2
 fi
 gnuplot -e "dir='$dir'" "$script"

@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libboost-dev libmpfr-dev libmpfi-dev libgmp-dev
   catch2 doxygen gnuplot-nox libtomlplusplus-dev libcli11-dev libbenchmark-dev
   clang libclang-rt-14-dev
+  python3
 )
 if [[ "${1:-}" == "--tex" ]]; then
   packages+=(texlive-latex-base texlive-latex-recommended texlive-latex-extra)

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "framework/applications/load.hpp"
+#include "framework/core/io.hpp"
 #include "framework/core/problem.hpp"
 #include "tests/test_process.hpp"
 #include "tests/test_support.hpp"
@@ -122,7 +123,7 @@ TEST_CASE("cli: --help and --version", "[cli]") {
   CHECK(solveHelp.status == 0);
   for (const char* flag :
        {"--depth", "--tolerance", "--bounding", "--subdivision", "--scalar", "--precision",
-        "--classification", "--connection", "--jitter", "--out", "--json"})
+        "--classification", "--connection", "--jitter", "--out", "--ascii", "--cells", "--json"})
     CHECK(contains(solveHelp.out, flag));
   // The strategy help comes from the registries: models, the default, parameters.
   CHECK(contains(solveHelp.out, "paper, naive, crossing (default)"));
@@ -305,7 +306,7 @@ TEST_CASE("cli: a valid solve runs the pipeline and writes its outputs", "[cli]"
   }
   CHECK(fs::exists(out / "summary.json"));
   CHECK(fs::exists(out / "mesh.ply"));
-  CHECK(fs::exists(out / "cells.csv"));
+  CHECK(!fs::exists(out / "cells.csv"));  // only with --cells
   // --tolerance is a chord error: --depth stays the base level, the grid refines below it.
   const Run tolerance = ndcontour("solve " + valid + " --depth 3 --tolerance 1e-4 --json");
   INFO(tolerance.err);
@@ -437,14 +438,16 @@ TEST_CASE("cli: solve writes singular.csv and the diagnostics of docs/contracts.
   // A stale output of an earlier (application) run in the folder goes.
   fs::create_directories(out);
   std::ofstream(out / "input.ply") << "stale";
+  std::ofstream(out / "cells.csv") << "stale";
   std::ofstream(out / "summary.json") << "stale";
   const Run run = ndcontour("solve " + valid + " --depth 4 --out " + quoted(out.string()));
   INFO("stdout: " << run.out << "stderr: " << run.err);
   CHECK(run.status == 0);
   CHECK(run.err.empty());
-  for (const char* name : {"summary.json", "mesh.ply", "cells.csv", "singular.csv"})
+  for (const char* name : {"summary.json", "mesh.ply", "singular.csv"})
     CHECK(fs::exists(out / name));
   CHECK(!fs::exists(out / "input.ply"));
+  CHECK(!fs::exists(out / "cells.csv"));  // written only with --cells
   // The circle has no singular point: singular.csv is its header.
   CHECK(slurp(out / "singular.csv") == "point,sigma_min,u0,u1\n");
   const std::string summary = slurp(out / "summary.json");
@@ -455,9 +458,99 @@ TEST_CASE("cli: solve writes singular.csv and the diagnostics of docs/contracts.
   // The human summary: singular points, and every file written.
   CHECK(contains(run.out, "singular points: 0\n"));
   const std::string dir = out.string();
-  CHECK(contains(run.out, "wrote " + dir + "/mesh.ply, " + dir + "/cells.csv, " + dir +
-                              "/singular.csv, " + dir + "/summary.json\n"));
+  CHECK(contains(
+      run.out, "wrote " + dir + "/mesh.ply, " + dir + "/singular.csv, " + dir + "/summary.json\n"));
   // No stray temporary files.
   for (const auto& entry : fs::directory_iterator(out))
     CHECK(entry.path().filename().string().rfind(".", 0) != 0);
+}
+
+namespace {
+
+/// The size a binary PLY of ndcontour must have, from its header: `property double` 8 bytes,
+/// `property int` 4, a `list uchar int` of a triangle 1 + 3 * 4.
+std::size_t binaryPlySize(const std::string& bytes) {
+  const std::size_t header = bytes.find("end_header\n");
+  REQUIRE(header != std::string::npos);
+  std::istringstream lines(bytes.substr(0, header));
+  std::size_t size = header + 11, count = 0, record = 0;
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream words(line);
+    std::string word, type;
+    words >> word >> type;
+    if (word == "element") {
+      size += count * record;
+      words >> count;
+      record = 0;
+    } else if (word == "property") {
+      record += type == "double" ? 8 : type == "int" ? 4 : 1 + 3 * 4;
+    }
+  }
+  return size + count * record;
+}
+
+/// Solves `args` into DIR-binary (the default) and DIR-ascii (`--ascii --cells`) and checks
+/// that every PLY file of the two reads back the same, that the binary ones have the header
+/// and size of docs/contracts.md 4.4, and that only the second folder has cells.csv.
+void checkEncodings(const std::string& name, const std::string& args,
+                    const std::vector<std::string>& plyFiles) {
+  INFO(name);
+  const fs::path binary = scratch() / (name + "-binary"), ascii = scratch() / (name + "-ascii");
+  fs::remove_all(binary);
+  fs::remove_all(ascii);
+  const Run b = ndcontour("solve " + args + " --out " + quoted(binary.string()));
+  const Run a = ndcontour("solve " + args + " --ascii --cells --out " + quoted(ascii.string()));
+  INFO(b.err << a.err);
+  REQUIRE(b.status == 0);
+  REQUIRE(a.status == 0);
+  CHECK(!fs::exists(binary / "cells.csv"));
+  CHECK(fs::exists(ascii / "cells.csv"));
+  CHECK(contains(a.out, (ascii / "cells.csv").string()));
+  CHECK(slurp(binary / "singular.csv") == slurp(ascii / "singular.csv"));
+  for (const std::string& file : plyFiles) {
+    INFO(file);
+    const std::string bytes = slurp(binary / file);
+    CHECK(bytes.rfind("ply\nformat binary_little_endian 1.0\ncomment ndcontour ", 0) == 0);
+    CHECK(slurp(ascii / file).rfind("ply\nformat ascii 1.0\ncomment ndcontour ", 0) == 0);
+    CHECK(bytes.size() == binaryPlySize(bytes));
+    const ndc::PlyMesh mb = ndc::readPly(binary / file), ma = ndc::readPly(ascii / file);
+    CHECK(!mb.xyz.empty());
+    CHECK(!mb.simplices.empty());
+    CHECK(mb.xyz == ma.xyz);
+    CHECK(mb.u == ma.u);
+    CHECK(mb.simplices == ma.simplices);
+  }
+  // The mesh.ply counts are the summary's.
+  const std::string summary = slurp(binary / "summary.json");
+  const ndc::PlyMesh mesh = ndc::readPly(binary / "mesh.ply");
+  CHECK(contains(summary, "\"mesh\": {\"vertices\": " + std::to_string(mesh.xyz.size()) + ","));
+  const std::string simplices = mesh.simplices.front().size() == 2 ? "edges" : "triangles";
+  CHECK(contains(summary, "\"" + simplices + "\": " + std::to_string(mesh.simplices.size()) + ","));
+}
+
+}  // namespace
+
+TEST_CASE("cli: mesh.ply is binary PLY unless --ascii; cells.csv only with --cells", "[cli]") {
+  const std::string circle = quoted(writeProblem("valid.toml", kValid).string());
+  const std::string sphere = quoted((problemsDir() / "sphere.toml").string());
+  checkEncodings("curve-double", circle + " --depth 4", {"mesh.ply"});
+  checkEncodings("curve-mpfr", circle + " --depth 4 --scalar mpfr", {"mesh.ply"});
+  checkEncodings("surface-double", sphere + " --depth 3", {"mesh.ply"});
+  checkEncodings("surface-mpfr", sphere + " --depth 3 --scalar mpfr --precision 100", {"mesh.ply"});
+  // An application: its image and parameters, the second image, input.ply and ruled.ply.
+  checkEncodings("convex-hull",
+                 quoted((problemsDir() / "convex-hull-wavy-bump.toml").string()) + " --depth 2",
+                 {"mesh.ply", "input.ply", "ruled.ply"});
+
+  // A later run without --cells leaves no cells.csv of an earlier one behind.
+  const fs::path out = scratch() / "curve-double-ascii";
+  REQUIRE(fs::exists(out / "cells.csv"));
+  const Run again = ndcontour("solve " + circle + " --depth 4 --out " + quoted(out.string()));
+  CHECK(again.status == 0);
+  CHECK(!fs::exists(out / "cells.csv"));
+  CHECK(slurp(out / "mesh.ply").rfind("ply\nformat binary_little_endian 1.0\n", 0) == 0);
+
+  // --ascii and --cells choose files of --out: without it they are usage errors.
+  checkBadInput(ndcontour("solve " + circle + " --cells"), {"--cells needs --out DIR"});
+  checkBadInput(ndcontour("solve " + circle + " --ascii --json"), {"--ascii needs --out DIR"});
 }

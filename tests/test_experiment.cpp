@@ -232,6 +232,8 @@ TEST_CASE("experiment: bad configs exit 2 with one line naming file, line and co
        "5:14:", "depths lists a value twice"},
       {"timeout", "id = \"timeout\"\n" + head + circle + "depths = [3]\ntimeout_s = 0\n",
        "6:13:", "timeout_s must be positive"},
+      {"cells", "id = \"cells\"\n" + head + circle + "depths = [3]\ncells = 1\n",
+       "6:9:", "cells must be true or false, not an integer"},
       {"entry-key",
        "id = \"entry-key\"\n" + head + "problems = [{ file = \"" + example("circle") +
            "\", seed = 1 }]\ndepths = [3]\n",
@@ -311,8 +313,9 @@ TEST_CASE("experiment: a tiny grid writes the combined CSV, one row per run in g
     // Each run directory holds the solve outputs, its stderr and its command.
     const fs::path runDir = out / "tiny" / "runs" / r.at("run");
     for (const char* file :
-         {"summary.json", "mesh.ply", "cells.csv", "singular.csv", "stderr.txt", "command.txt"})
+         {"summary.json", "mesh.ply", "singular.csv", "stderr.txt", "command.txt"})
       CHECK(fs::exists(runDir / file));
+    CHECK(!fs::exists(runDir / "cells.csv"));  // only with `cells = true`
     CHECK(contains(slurp(runDir / "command.txt"), "ndcontour solve "));
   }
 
@@ -447,6 +450,51 @@ TEST_CASE("experiment: re-running skips finished runs and repeats unfinished one
   CHECK(csvRecords(out / "tiny" / "tiny.csv").size() == 4);
 }
 
+TEST_CASE("experiment: cells = true writes cells.csv; the report reads the binary meshes",
+          "[experiment]") {
+  const fs::path config = writeConfig(
+      "fig-cells",
+      "id = \"fig-cells\"\nartefact = \"figure\"\ndescription = \"d\"\nproblems = [\"" +
+          example("two-circles") + "\"]\nconnection = \"paper\"\ndepths = [3, 4]\ncells = true\n",
+      "cells-configs");
+  const fs::path out = scratch() / "cells-out";
+  fs::remove_all(out);
+  const Run run = experiment(config, out);
+  INFO(run.out << run.err);
+  REQUIRE(run.status == 0);
+  const fs::path runs = out / "fig-cells" / "runs";
+  const fs::path depth4 = runs / "two-circles.L4.linearized.binary.newton.paper.paper.double53";
+  const fs::path depth3 = runs / "two-circles.L3.linearized.binary.newton.paper.paper.double53";
+  for (const fs::path& dir : {depth3, depth4}) {
+    INFO(dir);
+    CHECK(fs::exists(dir / "cells.csv"));
+    CHECK(contains(slurp(dir / "command.txt"), " --cells --json"));
+    CHECK(slurp(dir / "mesh.ply").rfind("ply\nformat binary_little_endian 1.0\n", 0) == 0);
+  }
+  CHECK(contains(slurp(out / "fig-cells" / "provenance.json"), "\"cells\": true"));
+  // A run without its cells.csv is unfinished and runs again.
+  fs::remove(depth3 / "cells.csv");
+  const Run resumed = experiment(config, out);
+  CHECK(contains(resumed.out, "2 runs: 1 ran, 1 skipped"));
+  CHECK(fs::exists(depth3 / "cells.csv"));
+
+  // The report draws the cells and the polyline of the deepest run's binary mesh.ply.
+  const std::string report = "report --results " + quoted(out.string()) + " --configs " +
+                             quoted(config.parent_path().string());
+  const Run good = ndcontour(report);
+  INFO(good.out << good.err);
+  CHECK(good.status != 2);
+  CHECK(contains(slurp(out / "report.md"), "The polyline has "));
+  // A truncated mesh.ply is bad input: one line naming it, and status 2.
+  const std::string mesh = slurp(depth4 / "mesh.ply");
+  std::ofstream(depth4 / "mesh.ply", std::ios::binary) << mesh.substr(0, mesh.size() - 3);
+  const Run bad = ndcontour(report);
+  INFO(bad.out << bad.err);
+  CHECK(bad.status == 2);
+  CHECK(contains(bad.err,
+                 "ndcontour: " + (depth4 / "mesh.ply").string() + ": element 'edge' declares "));
+}
+
 TEST_CASE("experiment: failed and timed-out runs are recorded and reported, never dropped",
           "[experiment]") {
   // torus at depth 14: about 1.4e9 solution cells, over any machine's memory budget, which solve
@@ -531,6 +579,7 @@ TEST_CASE("experiment: provenance records code, build, config, grid, date and ma
                             "\"cpu_model\": \"",
                             "\"memory_bytes\": ",
                             "\"jobs\": 2",
+                            "\"cells\": false",
                             "\"total\": 4"})
     CHECK(contains(p, field));
   CHECK(contains(p, "\"sha256\": \"" + ndc::sha256Hex(slurp(config)) + "\""));

@@ -98,15 +98,15 @@ class ConfigReader {
 
   ExperimentConfig run(const toml::table& top, bool quick) {
     static const std::set<std::string> kTopKeys = {
-        "id",          "artefact",   "description", "problems",  "bounding",
-        "subdivision", "connection", "scalar",      "precision", "classification",
-        "projection",  "depths",     "seeds",       "timeout_s", "quick"};
+        "id",         "artefact",  "description", "problems",       "bounding",   "subdivision",
+        "connection", "scalar",    "precision",   "classification", "projection", "depths",
+        "seeds",      "timeout_s", "cells",       "quick"};
     for (auto&& [key, node] : top)
       if (!kTopKeys.count(std::string(key.str())))
         fail(key.source(), "unknown key '" + std::string(key.str()) +
                                "' (known: id, artefact, description, problems, bounding, "
                                "subdivision, connection, scalar, precision, classification, "
-                               "projection, depths, seeds, timeout_s, quick)");
+                               "projection, depths, seeds, timeout_s, cells, quick)");
 
     ExperimentConfig c;
     c.file = file_;
@@ -126,6 +126,7 @@ class ConfigReader {
       fail(artefact,
            "unknown artefact '" + c.artefact + "' (accepted: " + listed(kArtefactNames) + ")");
     c.description = stringOf(require(top, "description"), "description");
+    c.cells = cellsOf(top);
 
     require(top, "problems");
     require(top, "depths");
@@ -160,6 +161,15 @@ class ConfigReader {
   }
   [[noreturn]] void fail(const toml::node& node, const std::string& message) const {
     fail(node.source(), message);
+  }
+
+  /// `cells = true | false` (default false): whether the runs write cells.csv.
+  bool cellsOf(const toml::table& top) const {
+    const toml::node* node = top.get("cells");
+    if (!node) return false;
+    const auto* flag = node->as_boolean();
+    if (!flag) fail(*node, "cells must be true or false, not " + tomlTypeName(*node));
+    return flag->get();
   }
 
   const toml::node& require(const toml::table& table, const std::string& key) const {

@@ -285,16 +285,17 @@ void writeGeneratedProblems(ExperimentConfig& config, const fs::path& dir) {
   }
 }
 
-/// Resume: a run whose folder has a summary finished before; its outcome is read back. Returns
-/// the runs still to do, in grid order.
+/// Resume: a run whose folder has a summary (and cells.csv when the config asks for `cells`)
+/// finished before; its outcome is read back. Returns the runs still to do, in grid order.
 std::vector<std::size_t> resumeFinished(const std::vector<ExperimentRun>& runs,
-                                        const fs::path& runsDir, std::vector<Outcome>& outcomes,
-                                        Tally& tally) {
+                                        const fs::path& runsDir, bool cells,
+                                        std::vector<Outcome>& outcomes, Tally& tally) {
   std::error_code ec;
   std::vector<std::size_t> pending;
   for (std::size_t i = 0; i < runs.size(); ++i) {
     const fs::path runDir = runsDir / runs[i].id;
-    if (fs::exists(runDir / "summary.json", ec)) {
+    if (fs::exists(runDir / "summary.json", ec) &&
+        (!cells || fs::exists(runDir / "cells.csv", ec))) {
       outcomes[i] = readSummary(runDir);
       outcomes[i].skipped = true;
       ++tally.skipped;
@@ -361,7 +362,8 @@ class Scheduler {
       if (ec) throw InputError(runDir.string() + ": cannot create the run directory");
       // The command that repeats this run by hand, from the repository root.
       std::string command = "ndcontour";
-      for (const std::string& a : solveArguments(p.file, runDir.string(), run.settings)) {
+      for (const std::string& a :
+           solveArguments(p.file, runDir.string(), run.settings, config_.cells)) {
         command += ' ';
         command += shellWord(a);
       }
@@ -369,7 +371,8 @@ class Scheduler {
       // Children that run at once share the machine's memory budget.
       Settings shared = run.settings;
       shared.maxMemoryBytes = std::max<std::uint64_t>(defaultMemoryBudget() / jobs_, 1u << 30);
-      pid = spawnRun(options_.executable, solveArguments(p.path.string(), runDir.string(), shared),
+      pid = spawnRun(options_.executable,
+                     solveArguments(p.path.string(), runDir.string(), shared, config_.cells),
                      runDir / "stderr.txt", error);
     } catch (const std::exception& e) {
       error = e.what();
@@ -467,7 +470,8 @@ int runExperiment(ExperimentConfig config, const ExperimentOptions& options) {
   std::vector<Outcome> outcomes(runs.size());
   Tally tally;
   tally.total = runs.size();
-  const std::vector<std::size_t> pending = resumeFinished(runs, runsDir, outcomes, tally);
+  const std::vector<std::size_t> pending =
+      resumeFinished(runs, runsDir, config.cells, outcomes, tally);
   std::size_t failedBefore = 0;
   for (const Outcome& o : outcomes)
     if (o.skipped && o.status != "ok") ++failedBefore;

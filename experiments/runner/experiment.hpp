@@ -50,6 +50,8 @@ struct ExperimentConfig {
   std::vector<int> depths;           ///< default depths (a problem entry may override them)
   std::vector<std::uint64_t> seeds;  ///< default jitter seeds; empty: no jitter
   double timeoutS = 600;             ///< wall-clock limit of one run
+  /// `cells = true`: every run also writes cells.csv (`solve --cells`), e.g. for fig-cells.
+  bool cells = false;
 };
 
 /// Reads and validates a config (every key, type, name, range and file; the `[quick]` table
@@ -151,7 +153,8 @@ struct ExperimentOptions {
   std::string commandLine;
 };
 
-/// Runs every unfinished run of the grid (a run is finished when its summary.json exists),
+/// Runs every unfinished run of the grid (a run is finished when its summary.json exists, and
+/// its cells.csv when the config asks for `cells`),
 /// at most `jobs` at once, each limited to `timeoutS`, and writes `<out>/<id>/<id>.csv` and
 /// `provenance.json`. Progress goes to standard error, the final report to standard output.
 /// Returns 0 when every run succeeded, 1 when any failed, 128 + the signal (130, 143) when

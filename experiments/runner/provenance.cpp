@@ -236,7 +236,8 @@ std::string provenanceJson(const ExperimentConfig& c, const ExperimentOptions& o
     << "           \"scalar\": " << jsonArray(c.scalar)
     << ", \"precision_bits\": " << jsonArray(c.precision) << ", \"depths\": " << jsonArray(c.depths)
     << ", \"seeds\": " << (c.seeds.empty() ? std::string("null") : jsonArray(c.seeds))
-    << ", \"timeout_s\": " << jsonNumber(c.timeoutS) << "},\n"
+    << ", \"timeout_s\": " << jsonNumber(c.timeoutS)
+    << ", \"cells\": " << (c.cells ? "true" : "false") << "},\n"
     << "  \"runs\": {\"total\": " << tally.total << ", \"ran\": " << tally.ran
     << ", \"skipped\": " << tally.skipped << ", \"failed\": " << tally.failed
     << ", \"failed_runs\": " << jsonArray(tally.failedRuns) << ", \"jobs\": " << o.jobs << "},\n"

@@ -73,9 +73,10 @@ Outcome readSummary(const std::filesystem::path& runDir);
 /// The outcome of a child that ended with wait status `status` (or was killed on timeout).
 Outcome outcomeOf(const std::filesystem::path& runDir, int status, bool timedOut, double timeoutS);
 
-/// The arguments of `ndcontour solve` for one run (without the program name).
+/// The arguments of `ndcontour solve` for one run (without the program name); `cells` adds
+/// `--cells`.
 std::vector<std::string> solveArguments(const std::string& problem, const std::string& runDir,
-                                        const Settings& s);
+                                        const Settings& s, bool cells);
 
 /// Starts a run: standard input and output /dev/null, standard error into the run directory.
 /// Returns the pid, or -1 with `error` set.

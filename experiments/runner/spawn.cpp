@@ -124,7 +124,7 @@ Outcome outcomeOf(const fs::path& runDir, int status, bool timedOut, double time
 }
 
 std::vector<std::string> solveArguments(const std::string& problem, const std::string& runDir,
-                                        const Settings& s) {
+                                        const Settings& s, bool cells) {
   std::vector<std::string> a = {"solve",
                                 problem,
                                 "--out",
@@ -153,6 +153,7 @@ std::vector<std::string> solveArguments(const std::string& problem, const std::s
     a.push_back("--max-memory");
     a.push_back(std::to_string(s.maxMemoryBytes));
   }
+  if (cells) a.push_back("--cells");
   a.push_back("--json");
   return a;
 }

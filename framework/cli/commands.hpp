@@ -18,11 +18,11 @@ namespace ndc::cli {
 void printInfo(const Problem& problem, std::ostream& out);
 
 /// `ndcontour solve`: runs the pipeline with the options' settings, compares the mesh with the
-/// problem's `[expect]` (checkExpectation), writes summary.json, mesh.ply, cells.csv and
-/// singular.csv into `--out DIR` and prints the summary (JSON with `--json`). Differences from
-/// `[expect]`, dual vertices off M and unverified general position are warnings on standard
-/// error, one line each. Returns the exit status: kExitOk, or kExitExpectMismatch with
-/// `--check` when a compared key of `[expect]` differs.
+/// problem's `[expect]` (checkExpectation), writes summary.json, mesh.ply (binary, or ASCII with
+/// `--ascii`), singular.csv and with `--cells` cells.csv into `--out DIR` and prints the summary
+/// (JSON with `--json`). Differences from `[expect]`, dual vertices off M and unverified general
+/// position are warnings on standard error, one line each. Returns the exit status: kExitOk, or
+/// kExitExpectMismatch with `--check` when a compared key of `[expect]` differs.
 int runSolve(SolveOptions options, const Problem& problem);
 
 /// Options of `ndcontour bench`.

@@ -178,7 +178,12 @@ int runSolve(SolveOptions options, const Problem& problem) {
   const int status =
       options.check && expectationMismatch(result.summary.expect) ? kExitExpectMismatch : kExitOk;
   std::vector<std::string> written;
-  if (options.outDir) written = writeOutputs(*options.outDir, result);
+  if (options.outDir) {
+    OutputOptions output;
+    output.format = options.ascii ? PlyFormat::ascii : PlyFormat::binary;
+    output.cells = options.cells;
+    written = writeOutputs(*options.outDir, result, output);
+  }
   warn(problem, result.summary, options.check);
   if (options.json) {
     std::cout << toJson(result.summary);

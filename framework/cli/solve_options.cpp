@@ -113,9 +113,16 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
       ->type_name("SEED");
   solve
       .add_option("--out", o.outDir,
-                  "Write summary.json, mesh.ply, cells.csv, singular.csv and (when the topology "
-                  "is not certified) uncertified.csv to DIR")
+                  "Write summary.json, mesh.ply (binary PLY unless --ascii), singular.csv, "
+                  "cells.csv (with --cells) and (when the topology is not certified) "
+                  "uncertified.csv to DIR")
       ->type_name("DIR");
+  solve.add_flag("--ascii", o.ascii,
+                 "Write the PLY files of --out (mesh.ply; input.ply, ruled.ply of applications) "
+                 "as ASCII PLY instead of binary little-endian PLY");
+  solve.add_flag("--cells", o.cells,
+                 "Also write cells.csv to --out: one row per solution cell (index, centre, "
+                 "class, projected point)");
   solve
       .add_option("--max-memory", o.maxMemory,
                   "Memory the run may use (K, M, G, T: powers of 1024); a depth that needs more "
@@ -174,6 +181,9 @@ void validateSolveOptions(SolveOptions& o) {
   }
 
   // An existing output must be a directory; the pipeline decides what it may overwrite.
+  if (!o.outDir && (o.ascii || o.cells))
+    throw UsageError(std::string(o.ascii ? "--ascii" : "--cells") +
+                     " needs --out DIR (it chooses the files written there)");
   if (o.outDir) {
     std::error_code ec;
     if (o.outDir->empty()) throw UsageError("--out: empty directory name");

@@ -35,8 +35,10 @@ struct SolveOptions {
   Settings settings;
   std::optional<unsigned> precision;  ///< `--precision BITS` as given (before defaulting)
   std::optional<double> tolerance;    ///< `--tolerance h`: the chord error target (settings)
-  /// `--out DIR`: write summary.json, mesh.ply, cells.csv, singular.csv
+  /// `--out DIR`: write summary.json, mesh.ply, singular.csv (and cells.csv with `--cells`)
   std::optional<std::string> outDir;
+  bool ascii = false;     ///< `--ascii`: the PLY files of `--out` as ASCII (else binary) PLY
+  bool cells = false;     ///< `--cells`: also write cells.csv into `--out`
   bool json = false;      ///< `--json`: the summary on standard output, nothing else
   std::string maxMemory;  ///< `--max-memory SIZE` as given (parsed into settings)
   /// `--check`: exit with kExitExpectMismatch when the mesh differs from the problem's `[expect]`.

@@ -8,12 +8,13 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <functional>
-#include <map>
+#include <span>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -249,44 +250,110 @@ std::string toJson(const Summary& s) {
   return o.str();
 }
 
-void writePly(std::ostream& out, const RunResult& r) {
-  const std::size_t vertexCount = r.n ? r.vertices.size() / r.n : 0;
-  const std::size_t simplexCount = r.simplices.size() / (r.k + 1);
+namespace {
+
+/// The `format` line of a PLY header.
+const char* formatLine(PlyFormat format) {
+  return format == PlyFormat::ascii ? "format ascii 1.0\n" : "format binary_little_endian 1.0\n";
+}
+
+/// A block of binary PLY data of a known size: filled value by value (little endian) and
+/// written with one call.
+class BinaryBlock {
+ public:
+  explicit BinaryBlock(std::size_t bytes) : data_(bytes, '\0') {}
+
+  template <class T>
+  void put(T value) {
+    char* at = data_.data() + used_;
+    std::memcpy(at, &value, sizeof value);
+    if constexpr (std::endian::native == std::endian::big) std::reverse(at, at + sizeof value);
+    used_ += sizeof value;
+  }
+  void put(std::span<const double> values) {
+    for (double v : values) put(v);
+  }
+
+  void writeTo(std::ostream& out) const {
+    out.write(data_.data(), static_cast<std::streamsize>(used_));
+  }
+
+ private:
+  std::string data_;
+  std::size_t used_ = 0;
+};
+
+/// The values of the vertex properties of mesh.ply (x y z, u0.., x2 y2 z2), in header order.
+class VertexRows {
+ public:
+  explicit VertexRows(const RunResult& r)
+      : r_(r), app_(r.application.get()), second_(app_ && app_->secondImage) {
+    row_.resize(3 + r.n + (second_ ? 3 : 0));
+  }
+  std::size_t count() const { return r_.n ? r_.vertices.size() / r_.n : 0; }
+  std::size_t width() const { return row_.size(); }
+  bool second() const { return second_; }
+
+  /// The row of vertex v (valid until the next call).
+  std::span<const double> operator()(std::size_t v) {
+    const double* p = r_.vertices.data() + v * r_.n;
+    const std::size_t n = static_cast<std::size_t>(r_.n);
+    if (!app_) {
+      // The 3-D image: the first three coordinates, zero-padded.
+      for (std::size_t j = 0; j < 3; ++j) row_[j] = j < n ? p[j] : 0.0;
+      std::copy(p, p + n, row_.begin() + 3);
+      return row_;
+    }
+    // The application's map to R^3, and the surface parameters of B-spline variables.
+    const std::span<const double> x(p, n);
+    const auto image = app_->image(x);
+    std::copy(image.begin(), image.end(), row_.begin());
+    for (std::size_t j = 0; j < n; ++j) row_[3 + j] = app_->parameter(static_cast<int>(j), p[j]);
+    if (second_) {
+      const auto y = (*app_->secondImage)(x);
+      std::copy(y.begin(), y.end(), row_.begin() + 3 + n);
+    }
+    return row_;
+  }
+
+ private:
+  const RunResult& r_;
+  const ApplicationData* app_;
+  bool second_;
+  std::vector<double> row_;
+};
+
+/// The header of mesh.ply.
+void meshHeader(std::ostream& out, const RunResult& r, const VertexRows& rows, PlyFormat format) {
   const ApplicationData* app = r.application.get();
-  const bool second = app && app->secondImage;
-  out << "ply\nformat ascii 1.0\ncomment ndcontour " << NDC_VERSION << " problem "
+  out << "ply\n"
+      << formatLine(format) << "comment ndcontour " << NDC_VERSION << " problem "
       << r.summary.problem << "\n";
   if (app)
     out << "comment application " << app->name
         << ": x y z is the image in R^3, u0.. the surface parameters\n";
-  out << "element vertex " << vertexCount << "\n";
+  out << "element vertex " << rows.count() << "\n";
   out << "property double x\nproperty double y\nproperty double z\n";
   for (int j = 0; j < r.n; ++j) out << "property double u" << j << "\n";
-  if (second) out << "property double x2\nproperty double y2\nproperty double z2\n";
+  if (rows.second()) out << "property double x2\nproperty double y2\nproperty double z2\n";
+  const std::size_t simplexCount = r.simplices.size() / (r.k + 1);
   if (r.k == 1) {
     out << "element edge " << simplexCount << "\nproperty int vertex1\nproperty int vertex2\n";
   } else {
     out << "element face " << simplexCount << "\nproperty list uchar int vertex_indices\n";
   }
   out << "end_header\n";
-  for (std::size_t v = 0; v < vertexCount; ++v) {
-    const double* p = r.vertices.data() + v * r.n;
-    const std::span<const double> x(p, static_cast<std::size_t>(r.n));
-    if (app) {
-      // The application's map to R^3, and the surface parameters of B-spline variables.
-      for (double c : app->image(x)) out << number(c) << ' ';
-      for (int j = 0; j < r.n; ++j)
-        out << number(app->parameter(j, p[j])) << (j + 1 < r.n || second ? ' ' : '\n');
-      if (second) {
-        const auto y = (*app->secondImage)(x);
-        out << number(y[0]) << ' ' << number(y[1]) << ' ' << number(y[2]) << '\n';
-      }
-      continue;
-    }
-    // The 3-D image: the first three coordinates, zero-padded.
-    for (int j = 0; j < 3; ++j) out << number(j < r.n ? p[j] : 0.0) << ' ';
-    for (int j = 0; j < r.n; ++j) out << number(p[j]) << (j + 1 < r.n ? ' ' : '\n');
-  }
+}
+
+/// One row of values as ASCII PLY: each as `number` writes it (`%.17g`), separated by spaces.
+void asciiRow(std::ostream& out, std::span<const double> row) {
+  for (std::size_t i = 0; i < row.size(); ++i)
+    out << number(row[i]) << (i + 1 < row.size() ? ' ' : '\n');
+}
+
+void asciiMeshBody(std::ostream& out, const RunResult& r, VertexRows& rows) {
+  for (std::size_t v = 0; v < rows.count(); ++v) asciiRow(out, rows(v));
+  const std::size_t simplexCount = r.simplices.size() / (r.k + 1);
   for (std::size_t s = 0; s < simplexCount; ++s) {
     const std::int32_t* v = r.simplices.data() + s * (r.k + 1);
     if (r.k == 1) {
@@ -297,6 +364,32 @@ void writePly(std::ostream& out, const RunResult& r) {
       out << '\n';
     }
   }
+}
+
+void binaryMeshBody(std::ostream& out, const RunResult& r, VertexRows& rows) {
+  BinaryBlock vertices(rows.count() * rows.width() * sizeof(double));
+  for (std::size_t v = 0; v < rows.count(); ++v) vertices.put(rows(v));
+  vertices.writeTo(out);
+  const std::size_t corners = static_cast<std::size_t>(r.k) + 1;
+  const std::size_t simplexCount = r.simplices.size() / corners;
+  const std::size_t record = corners * sizeof(std::int32_t) + (r.k == 1 ? 0 : 1);
+  BinaryBlock simplices(simplexCount * record);
+  for (std::size_t s = 0; s < simplexCount; ++s) {
+    if (r.k != 1) simplices.put(static_cast<std::uint8_t>(corners));
+    for (std::size_t i = 0; i < corners; ++i) simplices.put(r.simplices[s * corners + i]);
+  }
+  simplices.writeTo(out);
+}
+
+}  // namespace
+
+void writePly(std::ostream& out, const RunResult& r, PlyFormat format) {
+  VertexRows rows(r);
+  meshHeader(out, r, rows, format);
+  if (format == PlyFormat::ascii)
+    asciiMeshBody(out, r, rows);
+  else
+    binaryMeshBody(out, r, rows);
 }
 
 void writeCellsCsv(std::ostream& out, const RunResult& r) {
@@ -348,39 +441,82 @@ void writeUncertifiedCsv(std::ostream& out, const RunResult& r) {
   }
 }
 
-void writeInputPly(std::ostream& out, const TriangleSoup& input) {
-  out << "ply\nformat ascii 1.0\ncomment ndcontour input surfaces\nelement vertex "
+void writeInputPly(std::ostream& out, const TriangleSoup& input, PlyFormat format) {
+  out << "ply\n"
+      << formatLine(format) << "comment ndcontour input surfaces\nelement vertex "
       << input.vertices.size() << "\nproperty double x\nproperty double y\nproperty double z\n"
       << "element face " << input.triangles.size()
       << "\nproperty list uchar int vertex_indices\nproperty int part\nend_header\n";
-  for (const auto& v : input.vertices)
-    out << number(v[0]) << ' ' << number(v[1]) << ' ' << number(v[2]) << '\n';
-  for (std::size_t t = 0; t < input.triangles.size(); ++t)
-    out << "3 " << input.triangles[t][0] << ' ' << input.triangles[t][1] << ' '
-        << input.triangles[t][2] << ' ' << input.part[t] << '\n';
+  if (format == PlyFormat::ascii) {
+    for (const auto& v : input.vertices)
+      out << number(v[0]) << ' ' << number(v[1]) << ' ' << number(v[2]) << '\n';
+    for (std::size_t t = 0; t < input.triangles.size(); ++t)
+      out << "3 " << input.triangles[t][0] << ' ' << input.triangles[t][1] << ' '
+          << input.triangles[t][2] << ' ' << input.part[t] << '\n';
+    return;
+  }
+  BinaryBlock vertices(input.vertices.size() * 3 * sizeof(double));
+  for (const auto& v : input.vertices) vertices.put(std::span<const double>(v));
+  vertices.writeTo(out);
+  BinaryBlock faces(input.triangles.size() * (1 + 4 * sizeof(std::int32_t)));
+  for (std::size_t t = 0; t < input.triangles.size(); ++t) {
+    faces.put(std::uint8_t{3});
+    for (int c : input.triangles[t]) faces.put(static_cast<std::int32_t>(c));
+    faces.put(static_cast<std::int32_t>(input.part[t]));
+  }
+  faces.writeTo(out);
 }
 
-void writeRuledPly(std::ostream& out, const RunResult& r) {
+namespace {
+
+/// The two triangles of ruled.ply for polyline edge (a, b): a a2 b2 and a b2 b, where x2 is
+/// vertex x of the second image (numbered after the first).
+std::array<std::int64_t, 6> ruledTriangles(const RunResult& r, std::size_t e,
+                                           std::size_t vertexCount) {
+  const std::int64_t a = r.simplices[2 * e], b = r.simplices[2 * e + 1];
+  const std::int64_t a2 = a + static_cast<std::int64_t>(vertexCount),
+                     b2 = b + static_cast<std::int64_t>(vertexCount);
+  return {a, a2, b2, a, b2, b};
+}
+
+}  // namespace
+
+void writeRuledPly(std::ostream& out, const RunResult& r, PlyFormat format) {
   // Each polyline edge (a, b) sweeps the quad S1(a) S2(a) S2(b) S1(b) of bitangent segments.
   const ApplicationData& app = *r.application;
   const std::size_t vertexCount = r.n ? r.vertices.size() / r.n : 0;
   const std::size_t edgeCount = r.simplices.size() / 2;
-  out << "ply\nformat ascii 1.0\ncomment ndcontour ruled surface of bitangent segments\n"
+  out << "ply\n"
+      << formatLine(format) << "comment ndcontour ruled surface of bitangent segments\n"
       << "element vertex " << 2 * vertexCount
       << "\nproperty double x\nproperty double y\nproperty double z\nelement face " << 2 * edgeCount
       << "\nproperty list uchar int vertex_indices\nend_header\n";
+  const bool ascii = format == PlyFormat::ascii;
+  BinaryBlock vertices(ascii ? 0 : 2 * vertexCount * 3 * sizeof(double));
   for (int which = 0; which < 2; ++which)
     for (std::size_t v = 0; v < vertexCount; ++v) {
       const std::span<const double> x(r.vertices.data() + v * r.n, static_cast<std::size_t>(r.n));
       const auto y = which == 0 ? app.image(x) : (*app.secondImage)(x);
-      out << number(y[0]) << ' ' << number(y[1]) << ' ' << number(y[2]) << '\n';
+      if (ascii)
+        out << number(y[0]) << ' ' << number(y[1]) << ' ' << number(y[2]) << '\n';
+      else
+        vertices.put(std::span<const double>(y));
     }
+  vertices.writeTo(out);
+  BinaryBlock faces(ascii ? 0 : 2 * edgeCount * (1 + 3 * sizeof(std::int32_t)));
   for (std::size_t e = 0; e < edgeCount; ++e) {
-    const std::int64_t a = r.simplices[2 * e], b = r.simplices[2 * e + 1];
-    const std::int64_t a2 = a + static_cast<std::int64_t>(vertexCount),
-                       b2 = b + static_cast<std::int64_t>(vertexCount);
-    out << "3 " << a << ' ' << a2 << ' ' << b2 << "\n3 " << a << ' ' << b2 << ' ' << b << '\n';
+    const auto t = ruledTriangles(r, e, vertexCount);
+    if (ascii) {
+      out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << "\n3 " << t[3] << ' ' << t[4] << ' '
+          << t[5] << '\n';
+      continue;
+    }
+    for (int i = 0; i < 6; ++i) {
+      if (i % 3 == 0) faces.put(std::uint8_t{3});
+      faces.put(static_cast<std::int32_t>(t[i]));
+    }
   }
+  faces.writeTo(out);
 }
 
 void installInterruptCleanup() {
@@ -413,192 +549,129 @@ void disarmTimeout() {
   ::setitimer(ITIMER_REAL, &none, nullptr);
 }
 
-std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const RunResult& result) {
-  std::error_code error;
-  std::filesystem::create_directories(dir, error);
-  if (error || !std::filesystem::is_directory(dir)) {
-    throw InputError(dir.string() + ": cannot create the output directory");
-  }
-  // Every file is formatted before the first one is written.
-  std::vector<std::pair<std::string, std::string>> files;
+namespace {
+
+/// The files of a run, each name with its whole text, in the order they are published.
+using OutputFiles = std::vector<std::pair<std::string, std::string>>;
+
+/// Every file of the run, formatted before the first one is written.
+OutputFiles formatOutputs(const RunResult& result, const OutputOptions& options) {
+  OutputFiles files;
   const auto add = [&](const char* name, auto write) {
     std::ostringstream text;
     write(text);
-    files.emplace_back(name, text.str());
+    files.emplace_back(name, std::move(text).str());
   };
-  add("mesh.ply", [&](std::ostream& o) { writePly(o, result); });
-  add("cells.csv", [&](std::ostream& o) { writeCellsCsv(o, result); });
+  const PlyFormat format = options.format;
+  add("mesh.ply", [&](std::ostream& o) { writePly(o, result, format); });
+  if (options.cells) add("cells.csv", [&](std::ostream& o) { writeCellsCsv(o, result); });
   add("singular.csv", [&](std::ostream& o) { writeSingularCsv(o, result); });
   if (!result.summary.topology.certified)
     add("uncertified.csv", [&](std::ostream& o) { writeUncertifiedCsv(o, result); });
   if (const ApplicationData* app = result.application.get()) {
-    add("input.ply", [&](std::ostream& o) { writeInputPly(o, app->input); });
+    add("input.ply", [&](std::ostream& o) { writeInputPly(o, app->input, format); });
     if (app->secondImage && result.k == 1)
-      add("ruled.ply", [&](std::ostream& o) { writeRuledPly(o, result); });
+      add("ruled.ply", [&](std::ostream& o) { writeRuledPly(o, result, format); });
   }
   add("summary.json", [&](std::ostream& o) { o << toJson(result.summary); });
+  return files;
+}
 
-  // Stage: every file into a hidden folder inside `dir` first, so that a full disk or an
-  // interrupt while writing leaves the previous run untouched (an interrupt removes the
-  // staging folder: see installInterruptCleanup).
-  const auto staging = dir / (".ndcontour-partial-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(staging, error);
-  std::filesystem::create_directory(staging, error);
-  if (error) throw InputError(dir.string() + ": cannot create a temporary folder in it");
-  copyPath(cleanup.folder, staging);
-  const auto abandon = [&](const std::string& message) {
+/// The hidden staging folder of writeOutputs inside `dir`: removed (and forgotten by the
+/// interrupt handlers) when a step fails, with ndc::InputError(message).
+class Staging {
+ public:
+  explicit Staging(const std::filesystem::path& dir)
+      : dir_(dir), path_(dir / (".ndcontour-partial-" + std::to_string(::getpid()))) {
+    std::error_code error;
+    std::filesystem::remove_all(path_, error);
+    std::filesystem::create_directory(path_, error);
+    if (error) throw InputError(dir.string() + ": cannot create a temporary folder in it");
+    copyPath(cleanup.folder, path_);
+  }
+
+  /// Writes every file into the staging folder.
+  void write(const OutputFiles& files) const {
+    for (const auto& [name, text] : files) {
+      if (cleanup.count < static_cast<sig_atomic_t>(InterruptCleanup::kPaths)) {
+        copyPath(cleanup.files[cleanup.count], path_ / name);
+        cleanup.count = cleanup.count + 1;
+      }
+      std::ofstream out(path_ / name, std::ios::binary);
+      out.write(text.data(), static_cast<std::streamsize>(text.size()));
+      out.flush();
+      if (!out) abandon((dir_ / name).string() + ": cannot write the file (disk full?)");
+    }
+  }
+
+  /// Moves the staged files into `dir` (summary.json last, as it is last in `files`), after
+  /// removing the previous summary.json and the previous outputs this run does not write.
+  std::vector<std::string> publish(const OutputFiles& files) const;
+
+  /// Removes the staging folder and throws InputError(message).
+  [[noreturn]] void abandon(const std::string& message) const {
     std::error_code ignored;
-    std::filesystem::remove_all(staging, ignored);
+    std::filesystem::remove_all(path_, ignored);
+    forget();
+    throw InputError(message);
+  }
+
+ private:
+  static void forget() {
     cleanup.count = 0;
     cleanup.folder[0] = '\0';
-    throw InputError(message);
-  };
-  for (const auto& [name, text] : files) {
-    if (cleanup.count < static_cast<sig_atomic_t>(InterruptCleanup::kPaths)) {
-      copyPath(cleanup.files[cleanup.count], staging / name);
-      cleanup.count = cleanup.count + 1;
-    }
-    std::ofstream out(staging / name, std::ios::binary);
-    out << text;
-    out.flush();
-    if (!out) abandon((dir / name).string() + ": cannot write the file (disk full?)");
   }
-  // Publish with SIGINT and SIGTERM held: the previous summary goes first (the folder reads as
-  // unfinished while files are replaced), and so do the previous outputs this run does not
-  // write (input.ply of an application problem, uncertified.csv of an uncertified run);
-  // summary.json last marks a finished run.
+
+  std::filesystem::path dir_, path_;
+};
+
+std::vector<std::string> Staging::publish(const OutputFiles& files) const {
+  // SIGINT, SIGTERM and the timeout are held: the previous summary goes first (the folder reads
+  // as unfinished while files are replaced), and so do the previous outputs this run does not
+  // write (cells.csv without --cells, input.ply and ruled.ply of an application problem,
+  // uncertified.csv of an uncertified run); summary.json last marks a finished run.
   const BlockInterrupts hold;
   const auto written = [&](const std::string& name) {
-    for (const auto& f : files)
-      if (f.first == name) return true;
-    return false;
+    return std::any_of(files.begin(), files.end(), [&](const auto& f) { return f.first == name; });
   };
-  for (const char* name : {"summary.json", "input.ply", "ruled.ply", "uncertified.csv"})
+  std::error_code error;
+  for (const char* name :
+       {"summary.json", "cells.csv", "input.ply", "ruled.ply", "uncertified.csv"})
     if (std::string(name) == "summary.json" || !written(name)) {
-      std::filesystem::remove(dir / name, error);
-      if (error) abandon((dir / name).string() + ": cannot remove the previous output");
+      std::filesystem::remove(dir_ / name, error);
+      if (error) abandon((dir_ / name).string() + ": cannot remove the previous output");
     }
   std::vector<std::string> names;
   for (const auto& [name, text] : files) {
-    std::filesystem::rename(staging / name, dir / name, error);
-    if (error) abandon((dir / name).string() + ": cannot write the file: " + error.message());
+    std::filesystem::rename(path_ / name, dir_ / name, error);
+    if (error) abandon((dir_ / name).string() + ": cannot write the file: " + error.message());
     names.push_back(name);
   }
-  std::filesystem::remove(staging, error);
-  cleanup.count = 0;
-  cleanup.folder[0] = '\0';
+  std::filesystem::remove(path_, error);
+  forget();
   // The run is published: a timeout held back until here has nothing left to stop.
   cleanup.published = 1;
   return names;
 }
 
-// --- Reading meshes back ---------------------------------------------------------------------
-
-namespace {
-
-/// An element declared in a PLY header.
-struct PlyElement {
-  std::string name;
-  std::size_t count = 0;
-  std::vector<std::string> properties;
-  bool list = false;
-};
-
-using PlyFail = std::function<void(const std::string&)>;
-
-/// The elements of an ASCII PLY header, up to and including end_header.
-std::vector<PlyElement> readPlyHeader(std::istream& in, const PlyFail& fail) {
-  std::string line;
-  if (!std::getline(in, line) || line != "ply") fail("not a PLY file");
-  std::vector<PlyElement> elements;
-  bool ascii = false;
-  while (std::getline(in, line)) {
-    std::istringstream words(line);
-    std::string word;
-    words >> word;
-    if (word == "end_header") break;
-    if (word == "format") {
-      std::string format;
-      words >> format;
-      ascii = format == "ascii";
-    } else if (word == "element") {
-      PlyElement e;
-      words >> e.name >> e.count;
-      elements.push_back(e);
-    } else if (word == "property") {
-      if (elements.empty()) fail("property before element");
-      std::string type, name;
-      words >> type;
-      if (type == "list") {
-        std::string countType, itemType;
-        words >> countType >> itemType;
-        elements.back().list = true;
-      }
-      words >> name;
-      elements.back().properties.push_back(name);
-    }
-  }
-  if (!ascii) fail("only ASCII PLY is read");
-  return elements;
-}
-
-/// One vertex line: x, y, z and the coordinates u0, u1, ...
-void readPlyVertex(const std::string& line, const PlyElement& e, PlyMesh& mesh,
-                   const PlyFail& fail) {
-  std::istringstream words(line);
-  std::map<std::string, double> value;
-  for (const std::string& p : e.properties) {
-    double v = 0;
-    if (!(words >> v)) fail("bad vertex line: " + line);
-    value[p] = v;
-  }
-  if (!value.count("x") || !value.count("y") || !value.count("z")) fail("vertex lacks x, y or z");
-  mesh.xyz.push_back({value["x"], value["y"], value["z"]});
-  std::vector<double> u;
-  for (int j = 0; value.count("u" + std::to_string(j)); ++j)
-    u.push_back(value["u" + std::to_string(j)]);
-  mesh.u.push_back(std::move(u));
-}
-
-/// One edge or face line: its vertex indices (a count first for a list property).
-void readPlySimplex(const std::string& line, const PlyElement& e, PlyMesh& mesh,
-                    const PlyFail& fail) {
-  std::istringstream words(line);
-  std::vector<int> s;
-  int count = 2;
-  if (e.list && !(words >> count)) fail("bad " + e.name + " line: " + line);
-  for (int j = 0; j < count; ++j) {
-    int v = 0;
-    if (!(words >> v) || v < 0 || static_cast<std::size_t>(v) >= mesh.xyz.size())
-      fail("bad " + e.name + " line: " + line);
-    s.push_back(v);
-  }
-  mesh.simplices.push_back(std::move(s));
-}
-
 }  // namespace
 
-PlyMesh readPly(const std::filesystem::path& file) {
-  std::ifstream stream(file, std::ios::binary);
-  if (!stream) throw InputError(file.string() + ": cannot read the file");
-  std::ostringstream text;
-  text << stream.rdbuf();
-  std::istringstream in(text.str());
-  const PlyFail fail = [&](const std::string& message) {
-    throw InputError(file.string() + ": " + message);
-  };
-  PlyMesh mesh;
-  std::string line;
-  for (const PlyElement& e : readPlyHeader(in, fail)) {
-    for (std::size_t i = 0; i < e.count; ++i) {
-      if (!std::getline(in, line)) fail("ends inside element '" + e.name + "'");
-      if (e.name == "vertex")
-        readPlyVertex(line, e, mesh, fail);
-      else if (e.name == "edge" || e.name == "face")
-        readPlySimplex(line, e, mesh, fail);
-    }
+std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const RunResult& result,
+                                      const OutputOptions& options) {
+  std::error_code error;
+  std::filesystem::create_directories(dir, error);
+  if (error || !std::filesystem::is_directory(dir)) {
+    throw InputError(dir.string() + ": cannot create the output directory");
   }
-  return mesh;
+  const OutputFiles files = formatOutputs(result, options);
+  // Stage: every file into a hidden folder inside `dir` first, so that a full disk or an
+  // interrupt while writing leaves the previous run untouched (an interrupt removes the
+  // staging folder: see installInterruptCleanup).
+  const Staging staging(dir);
+  staging.write(files);
+  return staging.publish(files);
 }
+
+// readPly: framework/core/ply_read.cpp.
 
 }  // namespace ndc
