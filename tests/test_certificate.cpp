@@ -148,7 +148,7 @@ TEST_CASE("The one-switch ||I - Y A|| kernel equals per-operation interval arith
       for (int j = 0; j < m; ++j) {
         Interval<double> r(i == j ? 1.0 : 0.0);
         for (int l = 0; l < m; ++l)
-          r -= Interval<double>(y[std::size_t(i) * m + l]) * a[std::size_t(l) * n + columns[j]];
+          r -= Interval<double>(y[std::size_t(l) * m + i]) * a[std::size_t(l) * n + columns[j]];
         row += Interval<double>(std::max(std::abs(r.lower()), std::abs(r.upper())));
       }
       reference = std::isnan(row.upper()) || std::isnan(reference)

@@ -270,10 +270,10 @@ TEST_CASE("Interval: the one-switch Krawczyk operator equals per-operation arith
     for (int i = 0; i < m; ++i) {
       using I = Interval<double>;
       I k(y[i]);
-      for (int l = 0; l < m; ++l) k -= I(inverse[std::size_t(i) * m + l]) * fy[l];
+      for (int l = 0; l < m; ++l) k -= I(inverse[std::size_t(l) * m + i]) * fy[l];
       for (int c = 0; c < m; ++c) {
         I a(i == c ? 1.0 : 0.0);
-        for (int l = 0; l < m; ++l) a -= I(inverse[std::size_t(i) * m + l]) * jx[l * m + c];
+        for (int l = 0; l < m; ++l) a -= I(inverse[std::size_t(l) * m + i]) * jx[l * m + c];
         k += a * (I(lo[c], hi[c]) - I(y[c]));
       }
       INFO("trial " << trial << " row " << i);

@@ -469,7 +469,7 @@ double identityResidualNorm(int m, std::span<const double> y,
     for (int j = 0; j < m; ++j) {
       FastInterval r(i == j ? 1.0 : 0.0);
       for (int l = 0; l < m; ++l) {
-        FastInterval product(y[std::size_t(i) * m + l]);
+        FastInterval product(y[std::size_t(l) * m + i]);
         product *= FastInterval(lower[l * m + j], upper[l * m + j]);
         r -= product;
       }
@@ -514,10 +514,10 @@ void krawczykOperator(int m, std::span<const double> y, std::span<const double> 
   for (int c = 0; c < m; ++c) shift[c] = FastInterval(lo[c], hi[c]) - FastInterval(y[c]);
   for (int i = 0; i < m; ++i) {
     FastInterval k(y[i]);
-    for (int l = 0; l < m; ++l) k -= FastInterval(inverse[std::size_t(i) * m + l]) * f[l];
+    for (int l = 0; l < m; ++l) k -= FastInterval(inverse[std::size_t(l) * m + i]) * f[l];
     for (int c = 0; c < m; ++c) {
       FastInterval a(i == c ? 1.0 : 0.0);
-      for (int l = 0; l < m; ++l) a -= FastInterval(inverse[std::size_t(i) * m + l]) * j[l * m + c];
+      for (int l = 0; l < m; ++l) a -= FastInterval(inverse[std::size_t(l) * m + i]) * j[l * m + c];
       k += a * shift[c];
     }
     kLower[i] = k.lower();

@@ -455,8 +455,7 @@ class FaceSolver {
     kLower_.resize(m_);
     kUpper_.resize(m_);
     if constexpr (std::is_same_v<S, double>) {
-      const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rows = inverse;
-      ndc::krawczykOperator(m_, y, std::span<const double>(rows.data(), rows.size()), fy, jx_,
+      ndc::krawczykOperator(m_, y, std::span<const double>(inverse.data(), inverse.size()), fy, jx_,
                             box.lo, box.hi, kLower_, kUpper_);
       return;
     }
@@ -1993,11 +1992,11 @@ class AdaptiveCrossing {
   std::vector<Failure> failure_;
   std::vector<S> trouble_;  ///< n per leaf: where its certificate failed (setTrouble)
   std::vector<std::uint8_t> hasTrouble_;
-  std::vector<FaceRef> unprovenFaces_;                 ///< recordUnproven
-  std::vector<std::vector<std::int32_t>> unprovenOf_;  ///< per leaf: its unproven faces
+  std::vector<FaceRef> unprovenFaces_;                  ///< recordUnproven
+  std::vector<std::vector<std::int32_t>> unprovenOf_;   ///< per leaf: its unproven faces
   CellMap<std::vector<std::int32_t>> unprovenOfEmpty_;  ///< per empty cell
-  std::vector<std::vector<std::int32_t>> blocks_;  ///< the leaves of certified blocks
-  std::vector<std::int32_t> block_;                ///< per leaf: its block, or -1
+  std::vector<std::vector<std::int32_t>> blocks_;       ///< the leaves of certified blocks
+  std::vector<std::int32_t> block_;                     ///< per leaf: its block, or -1
   /// Per block: its lower corner and level, and its leaves' failures before it (to dissolve
   /// it); a dissolved block has no leaves.
   std::vector<std::vector<std::int32_t>> blockLo_;
