@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian packages ndcontour needs, and nothing when they are all present.
-# Usage: scripts/setup.sh [--tex]   (--tex also installs TeX for the `paper` target)
+# Usage: scripts/setup.sh [--tex] [--bench]
+#   --tex    also installs TeX for the `paper` target
+#   --bench  also installs CGAL, GUDHI, numpy and scipy for the peer benchmark in bench/ (bench/run.sh)
 set -euo pipefail
 
 packages=(
@@ -10,9 +12,16 @@ packages=(
   clang libclang-rt-14-dev
   python3
 )
-if [[ "${1:-}" == "--tex" ]]; then
-  packages+=(texlive-latex-base texlive-latex-recommended texlive-latex-extra)
-fi
+for arg in "$@"; do
+  case "$arg" in
+    --tex) packages+=(texlive-latex-base texlive-latex-recommended texlive-latex-extra) ;;
+    --bench) packages+=(libcgal-dev libgudhi-dev libtbb-dev python3 python3-numpy python3-scipy) ;;
+    *)
+      echo "setup: unknown option '$arg' (usage: scripts/setup.sh [--tex] [--bench])" >&2
+      exit 2
+      ;;
+  esac
+done
 
 missing=()
 for p in "${packages[@]}"; do

@@ -1,0 +1,273 @@
+// Peer benchmark (bench/, docs/performance.md): GUDHI's manifold tracing in a Coxeter
+// triangulation (Gudhi::coxeter_triangulation::manifold_tracing_algorithm with an
+// Implicit_manifold_intersection_oracle) on the benchmark problems, given by the same polynomials
+// as their problem files. The traced k-simplices of the triangulation (k the codimension) and
+// their intersection points are the vertices; GUDHI's Cell_complex gives the dual cells, whose
+// 1-cells are the edges (curves) and whose 2-cells, polygons, are fanned into triangles
+// (surfaces). Writes ASCII PLY (x y z u0.., as ndcontour does) and prints one JSON line.
+//
+// Usage: gudhi_trace PROBLEM [--scale S] [--out mesh.ply]
+//   PROBLEM: torus, clifford-torus-rotated, sphere-r5, flat-torus-r6, circle-r8, genus2
+//   S: the scale of the Coxeter triangulation (the length of its edges is about S)
+#include <gudhi/Coxeter_triangulation.h>
+#include <gudhi/Coxeter_triangulation/Cell_complex/Cell_complex.h>
+#include <gudhi/Implicit_manifold_intersection_oracle.h>
+#include <gudhi/Manifold_tracing.h>
+
+#include <Eigen/Dense>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+// A problem: n variables, n - k equations F, and a point on the manifold (the seed).
+struct Problem {
+  int n = 0, equations = 0;
+  std::function<VectorXd(const VectorXd&)> f;
+  VectorXd seed;
+};
+
+// The function object GUDHI's oracle needs (amb_d, cod_d, seed, operator()).
+struct Function {
+  const Problem* p;
+  VectorXd operator()(const VectorXd& x) const { return p->f(x); }
+  std::size_t amb_d() const { return static_cast<std::size_t>(p->n); }
+  std::size_t cod_d() const { return static_cast<std::size_t>(p->equations); }
+  VectorXd seed() const { return p->seed; }
+};
+
+// Sphere |x| = 1 cut by the affine hyperplanes M x + d = 0 (sphere-r5, circle-r8): a point on
+// it is the foot c0 of the origin on the flat plus rho times a unit direction in the flat.
+Problem sphereSection(const MatrixXd& m, const VectorXd& d) {
+  Problem p;
+  p.n = static_cast<int>(m.cols());
+  p.equations = static_cast<int>(m.rows()) + 1;
+  p.f = [m, d](const VectorXd& x) {
+    VectorXd r(m.rows() + 1);
+    r(0) = x.squaredNorm() - 1;
+    r.tail(m.rows()) = m * x + d;
+    return r;
+  };
+  const MatrixXd gram = m * m.transpose();
+  const VectorXd c0 = -m.transpose() * gram.ldlt().solve(d);
+  VectorXd u = VectorXd::Ones(p.n);
+  u -= m.transpose() * gram.ldlt().solve(m * u);
+  p.seed = c0 + std::sqrt(1 - c0.squaredNorm()) * u.normalized();
+  return p;
+}
+
+// The Clifford torus q1^2 + q2^2 = q3^2 + q4^2 = 0.5, q5 = .. = 0 in the coordinates q = R x.
+Problem rotatedClifford(const MatrixXd& r) {
+  Problem p;
+  p.n = static_cast<int>(r.rows());
+  p.equations = p.n - 2;
+  p.f = [r](const VectorXd& x) {
+    const VectorXd q = r * x;
+    VectorXd v(r.rows() - 2);
+    v(0) = q(0) * q(0) + q(1) * q(1) - 0.5;
+    v(1) = q(2) * q(2) + q(3) * q(3) - 0.5;
+    for (int i = 4; i < r.rows(); ++i) v(i - 2) = q(i);
+    return v;
+  };
+  VectorXd q = VectorXd::Zero(p.n);
+  q(0) = q(2) = std::sqrt(0.5);
+  p.seed = r.transpose() * q;
+  return p;
+}
+
+MatrixXd planeRotation(int n, int i, int j, double c, double s) {
+  MatrixXd g = MatrixXd::Identity(n, n);
+  g(i, i) = g(j, j) = c;
+  g(i, j) = -s;
+  g(j, i) = s;
+  return g;
+}
+
+bool makeProblem(const std::string& name, Problem& p) {
+  if (name == "torus") {
+    p.n = 3;
+    p.equations = 1;
+    p.f = [](const VectorXd& x) {
+      const double s = x.squaredNorm() + 0.84;
+      return VectorXd::Constant(1, s * s - 4 * (x(0) * x(0) + x(1) * x(1)));
+    };
+    p.seed = Eigen::Vector3d(1.4, 0, 0);
+  } else if (name == "genus2") {
+    p.n = 3;
+    p.equations = 1;
+    p.f = [](const VectorXd& x) {
+      const double r = x(0) * x(0) + x(1) * x(1);
+      const double f = r * r - x(0) * x(0) + x(1) * x(1);
+      return VectorXd::Constant(1, f * f + x(2) * x(2) - 0.01);
+    };
+    p.seed = Eigen::Vector3d(std::sqrt((1 + std::sqrt(1.4)) / 2), 0, 0);
+  } else if (name == "clifford-torus-rotated") {
+    // bench/problems/clifford-torus-rotated.toml: q = H x, H the 4x4 Hadamard matrix / 2.
+    MatrixXd h(4, 4);
+    h << 1, 1, 1, 1, 1, -1, 1, -1, 1, 1, -1, -1, 1, -1, -1, 1;
+    p = rotatedClifford(0.5 * h);
+  } else if (name == "flat-torus-r6") {
+    // bench/problems/flat-torus-r6.toml: R a product of five plane rotations by (0.6, 0.8).
+    const MatrixXd r = planeRotation(6, 0, 3, 0.6, 0.8) * planeRotation(6, 1, 4, 0.8, 0.6) *
+                       planeRotation(6, 2, 5, 0.6, 0.8) * planeRotation(6, 3, 1, 0.8, 0.6) *
+                       planeRotation(6, 4, 2, 0.6, 0.8);
+    p = rotatedClifford(r);
+  } else if (name == "sphere-r5") {
+    MatrixXd m(2, 5);
+    m << 1, 1, -1, 0, 0.5, 0, 1, 0.5, -1, 1;
+    VectorXd d(2);
+    d << 0.1, -0.05;
+    p = sphereSection(m, d);
+  } else if (name == "circle-r8") {
+    MatrixXd m(6, 8);
+    m << 1, 1, -1, 0, 0.5, 0, 0, 0.25,    //
+        0, 1, 0.5, -1, 1, 0.25, 0, 0,     //
+        0.5, 0, 1, 1, -1, 1, 0, 0,        //
+        1, -0.5, 0, 1, 0.25, -1, 0.5, 0,  //
+        0, 0, 1, 0, 0.5, 1, -1, 1,        //
+        0.25, 1, 0, 0.5, 0, 0, 1, -1;
+    VectorXd d(6);
+    d << 0.1, -0.05, 0.15, -0.1, 0.05, -0.1;
+    p = sphereSection(m, d);
+  } else {
+    return false;
+  }
+  return true;
+}
+
+[[noreturn]] void usage(const char* message) {
+  std::fprintf(stderr,
+               "gudhi_trace: %s\nusage: gudhi_trace PROBLEM [--scale S] [--out mesh.ply]\n"
+               "  PROBLEM: torus, clifford-torus-rotated, sphere-r5, flat-torus-r6, circle-r8, "
+               "genus2\n",
+               message);
+  std::exit(2);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace Gudhi::coxeter_triangulation;
+  if (argc < 2) usage("no problem");
+  const std::string name = argv[1];
+  std::string out;
+  double scale = 0.1;
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (i + 1 >= argc) usage(("missing value after " + a).c_str());
+    const char* v = argv[++i];
+    if (a == "--scale") {
+      scale = std::atof(v);
+    } else if (a == "--out") {
+      out = v;
+    } else {
+      usage(("unknown option " + a).c_str());
+    }
+  }
+  Problem problem;
+  if (!makeProblem(name, problem)) usage(("unknown problem " + name).c_str());
+  const int n = problem.n, k = n - problem.equations;
+
+  const auto start = std::chrono::steady_clock::now();
+  const Function function{&problem};
+  auto oracle = make_oracle(function);
+  Coxeter_triangulation<> cox(static_cast<std::size_t>(n));
+  // A fixed, generic offset (no randomness: the runs are repeatable), then the scale.
+  VectorXd offset(n);
+  for (int i = 0; i < n; ++i) offset(i) = 0.1234567 + 0.0712345 * i;
+  cox.change_offset(offset);
+  cox.change_matrix(scale * cox.matrix());
+  using MT = Manifold_tracing<Coxeter_triangulation<>>;
+  using Out_simplex_map = MT::Out_simplex_map;
+  Out_simplex_map traced;
+  std::vector<VectorXd> seeds(1, problem.seed);
+  manifold_tracing_algorithm(seeds, cox, oracle, traced);
+  Cell_complex<Out_simplex_map> complex(static_cast<std::size_t>(k));
+  complex.construct_complex(traced);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  // Vertices: the 0-cells with their points; simplices: edges or fanned polygons.
+  using Cell = Cell_complex<Out_simplex_map>::Hasse_cell;
+  std::map<Cell*, int> index;
+  std::vector<VectorXd> points;
+  for (const auto& [cell, point] : complex.cell_point_map()) {
+    index.emplace(cell, static_cast<int>(points.size()));
+    points.push_back(point);
+  }
+  auto ends = [&](Cell* edge) {
+    auto& b = edge->get_boundary();
+    return std::array<int, 2>{index.at(b.at(0).first), index.at(b.at(1).first)};
+  };
+  std::vector<std::vector<int>> simplices;
+  std::size_t cells[3] = {points.size(), 0, 0};
+  const auto& maps = complex.interior_simplex_cell_maps();
+  if (maps.size() > 1) cells[1] = maps[1].size();
+  if (maps.size() > 2) cells[2] = maps[2].size();
+  if (k == 1) {
+    for (const auto& [simplex, cell] : maps[1]) {
+      const auto e = ends(cell);
+      simplices.push_back({e[0], e[1]});
+    }
+  } else if (maps.size() > 2) {
+    for (const auto& [simplex, cell] : maps[2]) {
+      // Order the polygon's vertices by walking its boundary edges, then fan it.
+      std::map<int, std::vector<int>> next;
+      for (auto& [edge, incidence] : cell->get_boundary()) {
+        const auto e = ends(edge);
+        next[e[0]].push_back(e[1]);
+        next[e[1]].push_back(e[0]);
+      }
+      std::vector<int> cycle{next.begin()->first};
+      int previous = -1;
+      while (true) {
+        const auto& around = next[cycle.back()];
+        if (around.size() != 2) break;  // not a cycle (never seen): fan what was walked
+        const int following = around[0] != previous ? around[0] : around[1];
+        if (following == cycle.front() || cycle.size() > next.size()) break;
+        previous = cycle.back();
+        cycle.push_back(following);
+      }
+      for (std::size_t i = 1; i + 1 < cycle.size(); ++i)
+        simplices.push_back({cycle[0], cycle[i], cycle[i + 1]});
+    }
+  }
+
+  if (!out.empty()) {
+    std::ofstream o(out);
+    o.precision(17);
+    o << "ply\nformat ascii 1.0\ncomment gudhi_trace " << name << "\nelement vertex "
+      << points.size() << "\nproperty double x\nproperty double y\nproperty double z\n";
+    for (int j = 0; j < n; ++j) o << "property double u" << j << "\n";
+    if (k == 1)
+      o << "element edge " << simplices.size() << "\nproperty int vertex1\nproperty int vertex2\n";
+    else
+      o << "element face " << simplices.size() << "\nproperty list uchar int vertex_indices\n";
+    o << "end_header\n";
+    for (const VectorXd& p : points) {
+      for (int j = 0; j < 3; ++j) o << (j < n ? p(j) : 0.0) << ' ';
+      for (int j = 0; j < n; ++j) o << p(j) << (j + 1 < n ? ' ' : '\n');
+    }
+    for (const auto& s : simplices) {
+      if (k != 1) o << s.size() << ' ';
+      for (std::size_t i = 0; i < s.size(); ++i) o << s[i] << (i + 1 < s.size() ? ' ' : '\n');
+    }
+  }
+  std::printf(
+      "{\"tool\": \"gudhi\", \"problem\": \"%s\", \"n\": %d, \"k\": %d, \"scale\": %g, "
+      "\"vertices\": %zu, \"cells\": [%zu, %zu, %zu], \"simplices\": %zu, \"time_s\": %.6f}\n",
+      name.c_str(), n, k, scale, points.size(), cells[0], cells[1], cells[2], simplices.size(),
+      seconds);
+  return 0;
+}

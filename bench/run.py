@@ -1,0 +1,275 @@
+#!/usr/bin/python3
+"""The peer benchmark (docs/performance.md, "Peer benchmark"): ndcontour against CGAL's
+Surface_mesher and GUDHI's manifold tracing on the same problems, at matched error.
+
+Usage: bench/run.sh [--quick] [--out FILE] [--bindir DIR] [--repeats R] [--workdir DIR]
+
+1. Exploration: runs ndcontour at a few depths and each peer at a few resolutions once, and
+   measures every mesh with bench/measure.py (two-sided Hausdorff distance to the true manifold
+   where it is known in closed form, max |F|/|grad F| otherwise; components, Euler
+   characteristic).
+2. Matching: pairs every ndcontour depth with the peer run of the nearest error (log scale,
+   within a factor 4).
+3. Timing: runs each pair's two commands R times, interleaved (A B A B ..), as whole processes
+   (wall time, output written), and reports medians and spreads (min-max).
+4. Writes the tables, with the machine, load, date and commit, between the markers
+   <!-- peer-bench:begin --> and <!-- peer-bench:end --> of FILE (docs/performance.md by
+   default; the section is appended when the markers are missing).
+
+--quick: the smallest settings of two problems, 1 repeat (the ctest "peer-bench-quick").
+No time is asserted anywhere.
+"""
+
+import argparse
+import datetime
+import math
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, HERE)
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+import measure  # noqa: E402
+
+BEGIN, END = "<!-- peer-bench:begin -->", "<!-- peer-bench:end -->"
+
+# problem: (problem file, ndcontour depths, {peer: [settings]}); CGAL settings are
+# (angle bound in degrees, radius bound, distance bound), GUDHI settings the triangulation scale.
+FULL = {
+    "torus": ("experiments/problems/torus.toml", [4, 5, 6],
+              {"cgal": [(30, 0.1, 0.01), (30, 0.07, 0.007), (30, 0.05, 0.005), (30, 0.035, 0.0035),
+                        (30, 0.025, 0.0025)],
+               "gudhi": [0.1, 0.07, 0.05, 0.035]}),
+    "clifford-torus-rotated": ("bench/problems/clifford-torus-rotated.toml", [4, 5],
+                               {"gudhi": [0.15, 0.13, 0.12, 0.1]}),
+    "sphere-r5": ("bench/problems/sphere-r5.toml", [3, 4, 5], {"gudhi": [0.25, 0.2, 0.17, 0.12, 0.085]}),
+    "flat-torus-r6": ("bench/problems/flat-torus-r6.toml", [3, 4], {"gudhi": [0.2, 0.11]}),
+    "circle-r8": ("experiments/problems/circle-r8.toml", [5, 6],
+                  {"gudhi": [0.05, 0.03, 0.02, 0.015]}),
+    "genus2": ("experiments/problems/genus2.toml", [5, 6],
+               {"cgal": [(30, 0.05, 0.005), (30, 0.03, 0.003), (30, 0.02, 0.002),
+                         (30, 0.015, 0.0015), (30, 0.012, 0.0012)],
+                "gudhi": [0.025, 0.017, 0.012]}),
+}
+QUICK = {
+    "torus": ("experiments/problems/torus.toml", [3], {"cgal": [(30, 0.2, 0.02)],
+                                                       "gudhi": [0.3]}),
+    "circle-r8": ("experiments/problems/circle-r8.toml", [3], {"gudhi": [0.1]}),
+}
+
+
+def sh(cmd):
+    return subprocess.run(cmd, shell=True, capture_output=True, text=True).stdout.strip()
+
+
+class Runner:
+    def __init__(self, bindir, workdir, spacing):
+        self.bindir, self.workdir, self.spacing = bindir, workdir, spacing
+        self.ndc = os.path.join(bindir, "ndcontour")
+        help_text = subprocess.run([self.ndc, "solve", "--help"], capture_output=True,
+                                   text=True).stdout
+        self.ascii = ["--ascii"] if "--ascii" in help_text else []
+        self.count = 0
+
+    def command(self, tool, problem, file, setting):
+        """The command of one run and the mesh it writes."""
+        self.count += 1
+        out = os.path.join(self.workdir, f"{problem}-{tool}-{self.count}")
+        if tool == "ndcontour":
+            os.makedirs(out, exist_ok=True)
+            return ([self.ndc, "solve", os.path.join(ROOT, file), "--depth", str(setting),
+                     "--out", out] + self.ascii, os.path.join(out, "mesh.ply"))
+        mesh = out + ".ply"
+        if tool == "cgal":
+            angle, radius, distance = setting
+            return ([os.path.join(self.bindir, "cgal_torus"), "--problem", problem, "--angle",
+                     str(angle), "--radius", str(radius), "--distance", str(distance), "--out",
+                     mesh], mesh)
+        return ([os.path.join(self.bindir, "gudhi_trace"), problem, "--scale", str(setting),
+                 "--out", mesh], mesh)
+
+    @staticmethod
+    def timed(cmd):
+        start = time.perf_counter()
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+        seconds = time.perf_counter() - start
+        if proc.returncode != 0:
+            raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}): {proc.stderr[-2000:]}")
+        return seconds
+
+    def explore(self, tool, problem, file, setting):
+        cmd, mesh = self.command(tool, problem, file, setting)
+        seconds = self.timed(cmd)
+        m = measure.measure(problem, mesh, self.spacing)
+        return {"tool": tool, "problem": problem, "setting": setting, "cmd": cmd, "time": seconds,
+                **m}
+
+
+def settings_text(run):
+    s = run["setting"]
+    if run["tool"] == "ndcontour":
+        return f"depth {s}"
+    if run["tool"] == "cgal":
+        return f"angle {s[0]}, radius {s[1]:g}, distance {s[2]:g}"
+    return f"scale {s:g}"
+
+
+def topology_text(run):
+    t = f"{run['components']} comp, χ {run['euler']}"
+    extra = []
+    if run.get("boundary_edges"):
+        extra.append(f"{run['boundary_edges']} bdry e")
+    if run.get("nonmanifold_edges"):
+        extra.append(f"{run['nonmanifold_edges']} non-mfd e")
+    if run.get("bad_vertices"):
+        extra.append(f"{run['bad_vertices']} deg≠2 v")
+    return t + (" (" + ", ".join(extra) + ")" if extra else "")
+
+
+def match(nd_runs, peer_runs, limit=4.0):
+    """Each ndcontour run with the peer run of the nearest error (log scale), if within a factor
+    limit."""
+    pairs = []
+    for a in nd_runs:
+        best = None
+        for i, b in enumerate(peer_runs):
+            if not (0 < b["error"] < math.inf) or not (0 < a["error"] < math.inf):
+                continue
+            gap = abs(math.log(b["error"] / a["error"]))
+            if best is None or gap < best[0]:
+                best = (gap, i)
+        if best is not None and best[0] < math.log(limit):
+            pairs.append((a, peer_runs[best[1]]))
+    return pairs
+
+
+def fmt_time(times):
+    med = statistics.median(times)
+    spread = f"{min(times):.3g}–{max(times):.3g}" if len(times) > 1 else "–"
+    return med, spread
+
+
+def main(argv):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "performance.md"))
+    ap.add_argument("--bindir", default=None)
+    ap.add_argument("--repeats", type=int, default=None)
+    ap.add_argument("--workdir", default=None)
+    ap.add_argument("--only", default=None, help="comma-separated problems")
+    args = ap.parse_args(argv)
+    bindir = args.bindir
+    if bindir is None:
+        for b in ("build/bin", "build-bench/bin"):
+            if os.path.exists(os.path.join(ROOT, b, "gudhi_trace")):
+                bindir = os.path.join(ROOT, b)
+                break
+    if bindir is None:
+        sys.exit("bench/run.sh: no build with bench/ programs (scripts/setup.sh --bench, then "
+                 "build; or pass --bindir)")
+    for p in ("ndcontour", "cgal_torus", "gudhi_trace"):
+        if not os.access(os.path.join(bindir, p), os.X_OK):
+            sys.exit(f"bench/run.sh: {bindir}/{p} missing")
+    problems = QUICK if args.quick else FULL
+    if args.only:
+        problems = {k: v for k, v in problems.items() if k in args.only.split(",")}
+    repeats = args.repeats or (1 if args.quick else 3)
+    spacing = 0.05 if args.quick else 0.02
+    workdir = args.workdir or tempfile.mkdtemp(prefix="ndc-peer-bench-")
+    os.makedirs(workdir, exist_ok=True)
+    runner = Runner(bindir, workdir, spacing)
+
+    load_start = open("/proc/loadavg").read().split()[:3]
+    started = datetime.datetime.now(datetime.timezone.utc)
+    explored, rows = [], []
+    for problem, (file, depths, peers) in problems.items():
+        n = measure.PROBLEMS[problem][0]
+        nd = []
+        for d in depths:
+            r = runner.explore("ndcontour", problem, file, d)
+            nd.append(r)
+            explored.append(r)
+            print(f"[explore] {problem} ndcontour {settings_text(r)}: error {r['error']:.3g}, "
+                  f"{topology_text(r)}, {r['time']:.3g} s", file=sys.stderr, flush=True)
+        for peer, settings in peers.items():
+            pr = []
+            for s in settings:
+                r = runner.explore(peer, problem, file, s)
+                pr.append(r)
+                explored.append(r)
+                print(f"[explore] {problem} {peer} {settings_text(r)}: error {r['error']:.3g}, "
+                      f"{topology_text(r)}, {r['time']:.3g} s", file=sys.stderr, flush=True)
+            for a, b in match(nd, pr, math.inf if args.quick else 4.0):
+                ta, tb = [], []
+                for _ in range(repeats):  # interleaved: A B A B ..
+                    ta.append(Runner.timed(a["cmd"]))
+                    tb.append(Runner.timed(b["cmd"]))
+                rows.append((problem, n, peer, a, b, ta, tb))
+                print(f"[timed] {problem} {settings_text(a)} vs {peer} {settings_text(b)}: "
+                      f"{statistics.median(ta):.3g} s / {statistics.median(tb):.3g} s",
+                      file=sys.stderr, flush=True)
+    load_end = open("/proc/loadavg").read().split()[:3]
+
+    cpu = "unknown CPU"
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    commit = sh(f"git -C {ROOT} rev-parse --short HEAD 2>/dev/null") or "unknown"
+    versions = sh("dpkg-query -W -f='${Package} ${Version}, ' libcgal-dev libgudhi-dev "
+                  "2>/dev/null").rstrip(", ")
+    cmdline = "bench/run.sh" + ("".join(f" {a}" for a in argv) if argv else "")
+    lines = [BEGIN, "",
+             f"Measured {started:%Y-%m-%d %H:%M} UTC by `{cmdline}` on {os.cpu_count()} cores "
+             f"(`nproc` {sh('nproc')}; {cpu}), commit {commit}, {versions}; load average "
+             f"{' '.join(load_start)} at the start and {' '.join(load_end)} at the end; "
+             f"{repeats} interleaved run(s) per command.", "",
+             "| problem | n | peer | ndcontour | error | topology | median s | spread s | peer "
+             "settings | peer error | peer topology | peer median s | peer spread s | "
+             "ndcontour/peer |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for problem, n, peer, a, b, ta, tb in rows:
+        ma, sa = fmt_time(ta)
+        mb, sb = fmt_time(tb)
+        lines.append(f"| {problem} | {n} | {peer} | {settings_text(a)} | {a['error']:.2e} | "
+                     f"{topology_text(a)} | {ma:.3g} | {sa} | {settings_text(b)} | "
+                     f"{b['error']:.2e} | {topology_text(b)} | {mb:.3g} | {sb} | {ma / mb:.2f} |")
+    lines += ["", "All runs of the exploration (one run each; the error is the two-sided "
+              "Hausdorff distance, for genus2 the max |F|/|grad F| on the mesh):", "",
+              "| problem | tool | settings | vertices | simplices | mesh→M | M→mesh | error | "
+              "topology | s |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in explored:
+        m1 = f"{r['mesh_to_M']:.2e}" if "mesh_to_M" in r else "–"
+        m2 = f"{r['M_to_mesh']:.2e}" if "M_to_mesh" in r else "–"
+        lines.append(f"| {r['problem']} | {r['tool']} | {settings_text(r)} | {r['vertices']} | "
+                     f"{r['simplices']} | {m1} | {m2} | {r['error']:.2e} | {topology_text(r)} | "
+                     f"{r['time']:.3g} |")
+    lines += ["", END]
+    section = "\n".join(lines)
+
+    text = open(args.out).read() if os.path.exists(args.out) else ""
+    if BEGIN in text and END in text:
+        text = text[:text.index(BEGIN)] + section + text[text.index(END) + len(END):]
+    else:
+        text = text.rstrip("\n") + ("\n\n" if text else "") + "## Peer benchmark\n\n" + \
+            section + "\n"
+    with open(args.out, "w") as f:
+        f.write(text)
+    if not args.workdir:
+        shutil.rmtree(workdir, ignore_errors=True)
+    print(f"bench/run.sh: {len(rows)} matched rows, {len(explored)} runs -> {args.out}",
+          file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
