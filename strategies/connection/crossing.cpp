@@ -105,10 +105,12 @@ class FaceSolver {
         proven_ = false, withinRounding_ = true;
       return;
     }
-    std::vector<S> root;
-    const bool found = newton(box, root) && inside(box, ends, root);
+    // Krawczyk first: a box it proves root free needs no Newton iteration (on a face near M,
+    // most boxes of the recursion are such, and damped Newton there runs to its limit).
     const Krawczyk k = krawczyk(patches);
     if (k == Krawczyk::kNone) return;
+    std::vector<S> root;
+    const bool found = newton(box, root) && inside(box, ends, root);
     if (found && (k == Krawczyk::kUnique || krawczykAround(root, box) == Krawczyk::kUnique)) {
       roots.push_back(fullPoint(root));
       return;
