@@ -34,13 +34,11 @@ struct Lift<Interval<S>> {
 };
 
 /// de Casteljau along every axis of a tensor-product piece at local parameters t (t[a] = 0 at
-/// the piece's lower break, 1 at the upper one), in T = S or Interval<S>. `work` is scratch.
+/// the piece's lower break, 1 at the upper one), in T = S or Interval<S>, on `work`, which
+/// holds the piece's coefficients on entry (axis 0 fastest) and is overwritten.
 template <class T>
-T tensorDeCasteljau(const Bernstein<double>& piece, const T* t, std::vector<T>& work) {
-  const auto coefficients = piece.coefficients();
-  work.clear();
-  for (double c : coefficients) work.push_back(Lift<T>::of(c));
-  std::size_t count = work.size();
+T tensorDeCasteljau(const Bernstein<double>& piece, const T* t, T* work) {
+  std::size_t count = piece.coefficients().size();
   for (int a = 0; a < piece.dim(); ++a) {
     // Axis a is the fastest axis of what is left: blocks of d + 1 values, each reduced to one.
     const int d = piece.degree(a);
@@ -54,6 +52,14 @@ T tensorDeCasteljau(const Bernstein<double>& piece, const T* t, std::vector<T>& 
     count = blocks;
   }
   return work[0];
+}
+
+/// The same with the coefficients lifted to T into the vector `work` (any size).
+template <class T>
+T tensorDeCasteljau(const Bernstein<double>& piece, const T* t, std::vector<T>& work) {
+  work.clear();
+  for (double c : piece.coefficients()) work.push_back(Lift<T>::of(c));
+  return tensorDeCasteljau<T>(piece, t, work.data());
 }
 
 /// An enclosure of (x - lo) / (hi - lo) for an interval x and doubles lo < hi.
@@ -111,6 +117,15 @@ S PiecewiseBernstein::evaluate(std::span<const S> local) const {
     t[a] = (local[a] - S(breaks[a][i])) / (S(breaks[a][i + 1]) - S(breaks[a][i]));
   }
   if constexpr (std::is_same_v<S, double>) {
+    // Small pieces (a bicubic patch has 16 coefficients) on the stack: this is the innermost
+    // call of every Newton step on an application's expression.
+    constexpr std::size_t kStack = 64;
+    const auto coefficients = pieces[index].coefficients();
+    if (coefficients.size() <= kStack) {
+      double work[kStack];
+      std::copy(coefficients.begin(), coefficients.end(), work);
+      return tensorDeCasteljau<double>(pieces[index], t, work);
+    }
     thread_local std::vector<double> work;
     return tensorDeCasteljau<double>(pieces[index], t, work);
   } else {
