@@ -295,8 +295,15 @@ class FaceSolver {
       return r;
     };
     S r = residual(y);
+    // The residuals of the last iterations: Newton converges at least linearly (by a factor 4
+    // per step at a fold, where F - c is quadratic along the step); where damped steps lower
+    // the residual by less than half over three iterations, y sits near a local minimum of |F - c|
+    // that is not a root, as on a face M passes close to but misses.
+    S history[3] = {r, r, r};
     for (int iteration = 0; iteration < 60; ++iteration) {
       if (r == 0) return true;
+      if (iteration >= 3 && !(r < history[iteration % 3] / 2)) return residualWithinRounding(y);
+      history[iteration % 3] = r;
       for (int i = 0; i < m_; ++i) {
         for (int j = 0; j < m_; ++j) jf(i, j) = jacobian_[std::size_t(i) * n_ + free_[j]];
       }
