@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# ctest "peer-bench-quick" (bench/CMakeLists.txt): the peer benchmark's table generator runs on a
-# tiny case and writes a table with rows, into a scratch copy of docs/performance.md. No time is
+# ctest "peer-bench-quick" (bench/CMakeLists.txt): bench/run.sh, the peer benchmark's and the own
+# tables' generator, runs on tiny cases and writes tables with rows, into a scratch copy of
+# docs/performance.md. No time is
 # asserted. Usage: tests/peer_bench_quick.sh SOURCE_DIR BIN_DIR
 set -euo pipefail
 source_dir=$1
@@ -17,4 +18,7 @@ if [[ $rows -lt 1 ]]; then
   exit 1
 fi
 grep -q '^| circle-r8 | gudhi |' <<<"$section" || { echo "no circle-r8 run" >&2; exit 1; }
-echo "peer-bench-quick: $rows matched torus row(s)"
+own=$(sed -n '/<!-- self-bench:begin -->/,/<!-- self-bench:end -->/p' "$scratch/performance.md")
+grep -q '^| rotated-sphere | 4 | 3 |' <<<"$own" || { echo "no per-cell row for the sphere in R^4" >&2; exit 1; }
+grep -q '^| torus | 5 |' <<<"$own" || { echo "no output-writing row" >&2; exit 1; }
+echo "peer-bench-quick: $rows matched torus row(s); own tables written"

@@ -1,0 +1,208 @@
+#!/usr/bin/python3
+"""ndcontour's own tables (docs/performance.md, "ndcontour's own tables"), written by
+bench/run.sh after the peer benchmark:
+
+1. Cost per solution cell against n: `ndcontour experiment bench/per-cell.toml --jobs 1`
+   (rotated circles in R^3..R^8, rotated 2-spheres in R^3..R^7, depth 5), the time of each
+   stage per solution cell, next to the figures issue 14 started from.
+2. Thread speedup, when `solve` has `--threads`: the torus at depth 7 and the R^6 torus at
+   depth 5 with one thread and with all cores, interleaved, medians and spreads; the meshes of
+   the two thread counts are compared byte for byte.
+3. Output writing: the torus at depth 8 with `--out` (binary PLY) against `--json` (no files);
+   writing is (wall - timing_s.total) of the first minus the same of the second.
+
+Usage: bench/self.py [--quick] [--out FILE] [--bindir DIR] [--repeats R]
+Writes between <!-- self-bench:begin --> and <!-- self-bench:end --> of FILE (appended when
+the markers are missing). No time is asserted anywhere.
+"""
+
+import argparse
+import csv
+import datetime
+import filecmp
+import json
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+BEGIN, END = "<!-- self-bench:begin -->", "<!-- self-bench:end -->"
+
+# Issue 14's starting point, microseconds per solution cell at depth 5 (measured before the
+# certificate and adaptive refinement of issue 12 existed, so the cells are not the same).
+BEFORE = {("rotated-sphere", 3): 11, ("rotated-sphere", 4): 33, ("rotated-sphere", 5): 71,
+          ("rotated-sphere", 6): 163, ("rotated-sphere", 7): 405, ("rotated-circle", 3): 23,
+          ("rotated-circle", 8): 1562}
+STAGES = ("subdivision", "projection", "connection", "analysis")
+
+
+def sh(cmd):
+    return subprocess.run(cmd, shell=True, capture_output=True, text=True).stdout.strip()
+
+
+def run(cmd):
+    """Runs a command, returns (wall seconds, stdout); raises with its stderr on failure."""
+    start = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    seconds = time.perf_counter() - start
+    if proc.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}): {proc.stderr[-2000:]}")
+    return seconds, proc.stdout
+
+
+def spread(times):
+    return f"{min(times):.3g}–{max(times):.3g}" if len(times) > 1 else "–"
+
+
+def per_cell(ndc, workdir, quick):
+    """The per-cell table from one experiment run."""
+    cmd = [ndc, "experiment", os.path.join(HERE, "per-cell.toml"), "--jobs", "1", "--out",
+           workdir] + (["--quick"] if quick else [])
+    print("[per-cell] " + " ".join(cmd), file=sys.stderr, flush=True)
+    run(cmd)
+    rows = list(csv.DictReader(open(os.path.join(workdir, "per-cell", "per-cell.csv"))))
+    lines = ["| manifold | n | depth | solution cells | certified cells | total s | "
+             "µs / solution cell | " + " | ".join(f"{s} µs" for s in STAGES) +
+             " | before µs / cell |", "|---" * (8 + len(STAGES)) + "|"]
+    first = {}
+    growth = []
+    for r in rows:
+        generator = r["problem"].rsplit("-n", 1)[0]
+        n = int(r["n"])
+        cells = max(1, int(r["cells.solution"]))
+        total = float(r["timing_s.total"])
+        us = 1e6 * total / cells
+        stages = " | ".join(f"{1e6 * float(r['timing_s.' + s]) / cells:.0f}" for s in STAGES)
+        before = BEFORE.get((generator, n)) if r["depth"] == "5" else None
+        lines.append(f"| {generator} | {n} | {r['depth']} | {cells} | "
+                     f"{r.get('topology.certified_cells', '')} | {total:.3g} | {us:.0f} | "
+                     f"{stages} | {before if before else '–'} |")
+        first.setdefault(generator, (n, us))
+        growth.append((generator, n, us))
+    notes = []
+    for generator, (n0, us0) in first.items():
+        last = [g for g in growth if g[0] == generator][-1]
+        if last[1] > n0:
+            target = (last[1] / n0) ** 2
+            notes.append(f"{generator}: {last[2] / us0:.1f}x from R^{n0} to R^{last[1]} "
+                         f"(target at most (n/n0)^2 = {target:.1f}x)")
+    shown = "experiment bench/per-cell.toml --jobs 1 --out DIR" + (" --quick" if quick else "")
+    return shown, lines, notes
+
+
+def threads(ndc, workdir, quick, repeats):
+    """Thread speedup rows, or None when solve has no --threads."""
+    help_text = subprocess.run([ndc, "solve", "--help"], capture_output=True, text=True).stdout
+    if "--threads" not in help_text:
+        return None
+    cores = os.cpu_count() or 1
+    cases = [("experiments/problems/torus.toml", 4 if quick else 7),
+             ("experiments/problems/torus-r6.toml", 3 if quick else 5)]
+    lines = ["| problem | depth | threads | median s | spread s | speedup | meshes identical |",
+             "|---|---|---|---|---|---|---|"]
+    for file, depth in cases:
+        times = {1: [], cores: []}
+        outs = {}
+        for _ in range(repeats):  # interleaved: 1, N, 1, N ..
+            for t in (1, cores):
+                out = os.path.join(workdir, f"threads-{t}")
+                shutil.rmtree(out, ignore_errors=True)
+                seconds, _ = run([ndc, "solve", os.path.join(ROOT, file), "--depth", str(depth),
+                                  "--threads", str(t), "--out", out])
+                times[t].append(seconds)
+                outs[t] = os.path.join(out, "mesh.ply")
+        same = filecmp.cmp(outs[1], outs[cores], shallow=False)
+        m1 = statistics.median(times[1])
+        for t in (1, cores):
+            m = statistics.median(times[t])
+            lines.append(f"| {os.path.basename(file)} | {depth} | {t} | {m:.3g} | "
+                         f"{spread(times[t])} | {m1 / m:.2f} | {'yes' if same else 'NO'} |")
+        print(f"[threads] {file} depth {depth}: {m1:.3g} s / "
+              f"{statistics.median(times[cores]):.3g} s", file=sys.stderr, flush=True)
+    return lines
+
+
+def writing(ndc, workdir, quick, repeats):
+    """Output-writing rows: --out against --json at the same depth."""
+    depth = 5 if quick else 8
+    problem = os.path.join(ROOT, "experiments/problems/torus.toml")
+    out = os.path.join(workdir, "writing")
+    samples = {"out": [], "json": []}
+    for _ in range(repeats):
+        shutil.rmtree(out, ignore_errors=True)
+        wall, _ = run([ndc, "solve", problem, "--depth", str(depth), "--out", out])
+        total = json.load(open(os.path.join(out, "summary.json")))["timing_s"]["total"]
+        samples["out"].append((wall, total))
+        wall, text = run([ndc, "solve", problem, "--depth", str(depth), "--json"])
+        samples["json"].append((wall, json.loads(text)["timing_s"]["total"]))
+    extra = {k: statistics.median(w - t for w, t in v) for k, v in samples.items()}
+    wall_out = statistics.median(w for w, _ in samples["out"])
+    write = max(0.0, extra["out"] - extra["json"])
+    size = os.path.getsize(os.path.join(out, "mesh.ply"))
+    return [f"| torus | {depth} | {wall_out:.3g} | {extra['out']:.3f} | {extra['json']:.3f} | "
+            f"{write:.3f} | {100 * write / wall_out:.1f}% | {size / 1e6:.1f} MB |"]
+
+
+def main(argv):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "performance.md"))
+    ap.add_argument("--bindir", default=os.path.join(ROOT, "build", "bin"))
+    ap.add_argument("--repeats", type=int, default=None)
+    args, _ = ap.parse_known_args(argv)
+    ndc = os.path.join(args.bindir, "ndcontour")
+    if not os.access(ndc, os.X_OK):
+        sys.exit(f"bench/self.py: {ndc} missing (scripts/build.sh)")
+    repeats = args.repeats or (1 if args.quick else 3)
+    workdir = tempfile.mkdtemp(prefix="ndc-self-bench-")
+    load_start = open("/proc/loadavg").read().split()[:3]
+    started = datetime.datetime.now(datetime.timezone.utc)
+    try:
+        command, cell_lines, notes = per_cell(ndc, os.path.join(workdir, "per-cell"), args.quick)
+        thread_lines = threads(ndc, workdir, args.quick, repeats)
+        write_lines = writing(ndc, workdir, args.quick, repeats)
+    finally:
+        shutil.rmtree(workdir, ignore_errors=True)
+    load_end = open("/proc/loadavg").read().split()[:3]
+    commit = sh(f"git -C {ROOT} rev-parse --short HEAD 2>/dev/null") or "unknown"
+    cmdline = "bench/self.py" + "".join(f" {a}" for a in argv)
+    lines = [BEGIN, "",
+             f"Measured {started:%Y-%m-%d %H:%M} UTC by `{cmdline}` (run by `bench/run.sh`) on "
+             f"{os.cpu_count()} cores, commit {commit}; load average {' '.join(load_start)} at "
+             f"the start and {' '.join(load_end)} at the end; {repeats} interleaved run(s) per "
+             "timed command.", "",
+             f"**Cost per solution cell against n** (`ndcontour {command}`; stage times per "
+             "solution cell; *before*: the figures issue 14 was filed with, before the "
+             "certificate and adaptive refinement of issue 12, which the connection column now "
+             "includes):", ""] + cell_lines + [""] + [f"- {n}" for n in notes] + [""]
+    if thread_lines is None:
+        lines += ["**Thread speedup**: this build's `solve` has no `--threads`.", ""]
+    else:
+        lines += ["**Thread speedup** (`ndcontour solve FILE --depth L --threads T --out DIR`, "
+                  "whole processes; the meshes of the two thread counts compared byte for "
+                  "byte):", ""] + thread_lines + [""]
+    lines += ["**Output writing** (`solve --out DIR` against `solve --json`, which writes no "
+              "file; *extra* is wall - timing_s.total, writing the difference of the two):", "",
+              "| problem | depth | wall s | extra with --out s | extra with --json s | "
+              "writing s | writing / wall | mesh.ply |", "|---|---|---|---|---|---|---|---|"]
+    lines += write_lines + ["", END]
+    section = "\n".join(lines)
+    text = open(args.out).read() if os.path.exists(args.out) else ""
+    if BEGIN in text and END in text:
+        text = text[:text.index(BEGIN)] + section + text[text.index(END) + len(END):]
+    else:
+        text = text.rstrip("\n") + ("\n\n" if text else "") + "## ndcontour's own tables\n\n" + \
+            section + "\n"
+    with open(args.out, "w") as f:
+        f.write(text)
+    print(f"bench/self.py: tables -> {args.out}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
