@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Installs the Debian packages ndcontour needs, and nothing when they are all present.
-# Usage: scripts/setup.sh [--tex] [--bench]
+# Usage: scripts/setup.sh [--tex] [--bench] [--slurm]
 #   --tex    also installs TeX for the `paper` target
 #   --bench  also installs CGAL, GUDHI, numpy and scipy for the peer benchmark in bench/ (bench/run.sh)
+#   --slurm  also installs Slurm and MUNGE for `ndcontour experiment --executor slurm` and its test
+#            (a single-node cluster on localhost: scripts/slurm-cluster.sh)
 set -euo pipefail
 
 packages=(
@@ -16,8 +18,9 @@ for arg in "$@"; do
   case "$arg" in
     --tex) packages+=(texlive-latex-base texlive-latex-recommended texlive-latex-extra) ;;
     --bench) packages+=(libcgal-dev libgudhi-dev libtbb-dev python3 python3-numpy python3-scipy) ;;
+    --slurm) packages+=(slurm-wlm munge) ;;
     *)
-      echo "setup: unknown option '$arg' (usage: scripts/setup.sh [--tex] [--bench])" >&2
+      echo "setup: unknown option '$arg' (usage: scripts/setup.sh [--tex] [--bench] [--slurm])" >&2
       exit 2
       ;;
   esac

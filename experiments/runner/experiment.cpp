@@ -32,10 +32,11 @@ using runner_detail::gInterrupted;
 using runner_detail::InterruptScope;
 using runner_detail::jsonNumber;
 using runner_detail::Outcome;
-using runner_detail::outcomeOf;
+using runner_detail::prepareRun;
 using runner_detail::provenanceJson;
 using runner_detail::readFile;
 using runner_detail::readSummary;
+using runner_detail::shellWord;
 using runner_detail::solveArguments;
 using runner_detail::spawnRun;
 using runner_detail::stopChildren;
@@ -45,6 +46,16 @@ using runner_detail::utcNow;
 // --- Small helpers -------------------------------------------------------------------------
 
 namespace runner_detail {
+
+std::string shellWord(const std::string& s) {
+  const bool plain = !s.empty() && s.find_first_not_of(
+                                       "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                       "0123456789_-./=:+@%,") == std::string::npos;
+  if (plain) return s;
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
 
 std::string readFile(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -76,18 +87,31 @@ std::string csvField(const std::string& s) {
   return out + "\"";
 }
 
-/// A word for a POSIX shell (command.txt).
-std::string shellWord(const std::string& s) {
-  const bool plain = !s.empty() && s.find_first_not_of(
-                                       "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
-                                       "0123456789_-./=:+@%,") == std::string::npos;
-  if (plain) return s;
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
+}  // namespace
+
+namespace runner_detail {
+
+std::vector<std::string> prepareRun(const ExperimentConfig& config, const ExperimentRun& run,
+                                    const fs::path& runDir, int jobs) {
+  const ExperimentProblem& p = config.problems[run.problem];
+  std::error_code ec;
+  fs::create_directories(runDir, ec);
+  if (ec) throw InputError(runDir.string() + ": cannot create the run directory");
+  // The command that repeats this run by hand, from the repository root.
+  std::string command = "ndcontour";
+  for (const std::string& a : solveArguments(p.file, runDir.string(), run.settings, config.cells)) {
+    command += ' ';
+    command += shellWord(a);
+  }
+  writeAtomically(runDir / "command.txt", command + "\n");
+  // Runs at once share the machine's memory budget.
+  Settings shared = run.settings;
+  shared.maxMemoryBytes =
+      std::max<std::uint64_t>(defaultMemoryBudget() / std::max(1, jobs), 1u << 30);
+  return solveArguments(p.path.string(), runDir.string(), shared, config.cells);
 }
 
-}  // namespace
+}  // namespace runner_detail
 
 // --- Runner ----------------------------------------------------------------------------------
 
@@ -352,27 +376,11 @@ class Scheduler {
   /// Starts run i (its folder, its command.txt, the child), or records why it could not.
   void start(std::size_t i) {
     const ExperimentRun& run = runs_[i];
-    const ExperimentProblem& p = config_.problems[run.problem];
     const fs::path runDir = runsDir_ / run.id;
     std::string error;
     pid_t pid = -1;
     try {
-      std::error_code ec;
-      fs::create_directories(runDir, ec);
-      if (ec) throw InputError(runDir.string() + ": cannot create the run directory");
-      // The command that repeats this run by hand, from the repository root.
-      std::string command = "ndcontour";
-      for (const std::string& a :
-           solveArguments(p.file, runDir.string(), run.settings, config_.cells)) {
-        command += ' ';
-        command += shellWord(a);
-      }
-      writeAtomically(runDir / "command.txt", command + "\n");
-      // Children that run at once share the machine's memory budget.
-      Settings shared = run.settings;
-      shared.maxMemoryBytes = std::max<std::uint64_t>(defaultMemoryBudget() / jobs_, 1u << 30);
-      pid = spawnRun(options_.executable,
-                     solveArguments(p.path.string(), runDir.string(), shared, config_.cells),
+      pid = spawnRun(options_.executable, prepareRun(config_, run, runDir, jobs_),
                      runDir / "stderr.txt", error);
     } catch (const std::exception& e) {
       error = e.what();
@@ -390,27 +398,15 @@ class Scheduler {
   bool collect() {
     bool changed = false;
     for (auto it = running_.begin(); it != running_.end();) {
-      int status = 0;
-      const pid_t got = ::waitpid(it->pid, &status, WNOHANG);
-      const double elapsed = std::chrono::duration<double>(Clock::now() - it->start).count();
-      bool timedOut = false;
-      if (got == 0 && elapsed > config_.timeoutS) {
-        status = stopChildren({it->pid}).front();
-        timedOut = true;
-      } else if (got == 0 || (got < 0 && errno == EINTR)) {
+      const std::optional<runner_detail::Ended> ended =
+          runner_detail::pollChild(it->pid, it->start, config_.timeoutS);
+      if (!ended) {
         ++it;
         continue;
       }
-      Outcome o;
-      if (got < 0 && !timedOut) {
-        o.status = "error";
-        o.error = std::string("lost the child process: ") + std::strerror(errno);
-      } else {
-        o = outcomeOf(runsDir_ / runs_[it->run].id, status, timedOut, config_.timeoutS);
-      }
-      o.seconds = elapsed;
-      outcomes_[it->run] = o;
-      progress_.finished(runs_[it->run].id, o);
+      const fs::path runDir = runsDir_ / runs_[it->run].id;
+      outcomes_[it->run] = runner_detail::outcomeOfEnded(runDir, *ended, config_.timeoutS);
+      progress_.finished(runs_[it->run].id, outcomes_[it->run]);
       it = running_.erase(it);
       changed = true;
     }
@@ -475,13 +471,25 @@ int runExperiment(ExperimentConfig config, const ExperimentOptions& options) {
   std::size_t failedBefore = 0;
   for (const Outcome& o : outcomes)
     if (o.skipped && o.status != "ok") ++failedBefore;
-  std::fprintf(stderr, "experiment %s%s: %zu runs, %zu finished before, %d at once, timeout %s s\n",
+  std::fprintf(stderr,
+               "experiment %s%s: %zu runs, %zu finished before, %d at once%s, timeout %s s\n",
                config.id.c_str(), config.quick ? " (quick)" : "", runs.size(), tally.skipped,
-               std::max(1, options.jobs), jsonNumber(config.timeoutS).c_str());
+               std::max(1, options.jobs), options.executor == Executor::slurm ? " on Slurm" : "",
+               jsonNumber(config.timeoutS).c_str());
   std::fflush(stderr);
 
   ProgressReport progress(runs.size(), tally.skipped, failedBefore);
-  Scheduler(config, options, runs, runsDir, outcomes, progress).run(pending);
+  if (options.executor == Executor::slurm) {
+    const auto finished = [&](std::size_t i, const Outcome& o) {
+      outcomes[i] = o;
+      progress.finished(runs[i].id, o);
+    };
+    tally.slurmTasks = pending.size();
+    tally.slurmJobId = runner_detail::runOnSlurm(config, options, runs, dir, pending, finished,
+                                                 [&] { progress.tick(); });
+  } else {
+    Scheduler(config, options, runs, runsDir, outcomes, progress).run(pending);
+  }
   progress.end();
   if (gInterrupted) {
     // Finished runs keep their summaries; the rest run on the next invocation.

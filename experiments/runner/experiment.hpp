@@ -143,10 +143,23 @@ inline constexpr std::array<std::string_view, 39> kExperimentSummaryColumns = {
     "topology.uncertified_cells",
     "topology.block_cells"};
 
+/// Where the runs of an experiment are executed (docs/experiments.md).
+enum class Executor {
+  local,  ///< child processes of the runner on this machine, `jobs` at once
+  /// One Slurm job array (`sbatch --array --wait`, slurm.hpp), `jobs` tasks at once; the results
+  /// folder must be shared by the submitting machine and the nodes.
+  slurm
+};
+
 /// Options of one invocation of the runner.
 struct ExperimentOptions {
   std::filesystem::path outDir = "results";  ///< results go to `<outDir>/<id>/`
   int jobs = 1;                              ///< runs at once
+  Executor executor = Executor::local;       ///< where the runs are executed
+  /// Slurm executor: the partition (`sbatch --partition`); empty: the cluster's default.
+  std::string slurmPartition;
+  /// Slurm executor: further `sbatch` options, after the runner's own (so they override them).
+  std::vector<std::string> slurmArgs;
   /// The `ndcontour` executable the runs are started with.
   std::string executable = "/proc/self/exe";
   /// The command-line spelling of the invocation, recorded in the provenance.
@@ -155,11 +168,12 @@ struct ExperimentOptions {
 
 /// Runs every unfinished run of the grid (a run is finished when its summary.json exists, and
 /// its cells.csv when the config asks for `cells`),
-/// at most `jobs` at once, each limited to `timeoutS`, and writes `<out>/<id>/<id>.csv` and
+/// at most `jobs` at once, each limited to `timeoutS`, with the executor of `options` (the Slurm
+/// executor submits them as one job array and waits for it), and writes `<out>/<id>/<id>.csv` and
 /// `provenance.json`. Progress goes to standard error, the final report to standard output.
 /// Returns 0 when every run succeeded, 1 when any failed, 128 + the signal (130, 143) when
-/// interrupted by SIGINT or SIGTERM. Throws
-/// InputError when the output directory cannot be written.
+/// interrupted by SIGINT or SIGTERM (the Slurm job is cancelled). Throws
+/// InputError when the output directory cannot be written or `sbatch` refuses the job.
 int runExperiment(ExperimentConfig config, const ExperimentOptions& options);
 
 /// SHA-256 of `text` as 64 lowercase hex digits (the config hash of the provenance).

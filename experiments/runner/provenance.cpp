@@ -168,6 +168,17 @@ std::string procField(const char* file, const std::string& key) {
   return "";
 }
 
+/// The `executor` field: `{"name": "local"}`, or for Slurm also the job id (null when nothing
+/// was submitted), the number of tasks, the partition and the further sbatch options.
+std::string executorJson(const ExperimentOptions& o, const Tally& tally) {
+  if (o.executor != Executor::slurm) return "{\"name\": \"local\"}";
+  return "{\"name\": \"slurm\", \"job_id\": " +
+         (tally.slurmJobId.empty() ? std::string("null") : jsonQuoted(tally.slurmJobId)) +
+         ", \"tasks\": " + std::to_string(tally.slurmTasks) +
+         ", \"partition\": " + jsonQuoted(o.slurmPartition) +
+         ", \"sbatch_args\": " + jsonArray(o.slurmArgs) + "}";
+}
+
 }  // namespace
 
 namespace runner_detail {
@@ -241,6 +252,7 @@ std::string provenanceJson(const ExperimentConfig& c, const ExperimentOptions& o
     << "  \"runs\": {\"total\": " << tally.total << ", \"ran\": " << tally.ran
     << ", \"skipped\": " << tally.skipped << ", \"failed\": " << tally.failed
     << ", \"failed_runs\": " << jsonArray(tally.failedRuns) << ", \"jobs\": " << o.jobs << "},\n"
+    << "  \"executor\": " << executorJson(o, tally) << ",\n"
     << "  \"date\": " << jsonQuoted(started) << ",\n"
     << "  \"finished\": " << jsonQuoted(utcNow()) << ",\n"
     << "  \"machine\": {\"hostname\": " << jsonQuoted(host)

@@ -8,6 +8,7 @@
 #include <csignal>
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -26,6 +27,9 @@ std::string readFile(const std::filesystem::path& file);
 /// Shortest decimal text that reads back as the same double ("null" when not finite).
 std::string jsonNumber(double v);
 
+/// `s` as one word for a POSIX shell: unchanged when plain, else in single quotes.
+std::string shellWord(const std::string& s);
+
 // --- Provenance (provenance.cpp) -------------------------------------------------------------
 
 /// `s` without leading and trailing white space.
@@ -38,6 +42,8 @@ std::string utcNow();
 struct Tally {
   std::size_t total = 0, ran = 0, skipped = 0, failed = 0;
   std::vector<std::string> failedRuns;
+  std::size_t slurmTasks = 0;  ///< Slurm executor: the tasks submitted
+  std::string slurmJobId;      ///< Slurm executor: the job submitted; empty when none
 };
 
 /// The text of provenance.json (docs/experiments.md): config, command, source revision, build,
@@ -78,10 +84,48 @@ Outcome outcomeOf(const std::filesystem::path& runDir, int status, bool timedOut
 std::vector<std::string> solveArguments(const std::string& problem, const std::string& runDir,
                                         const Settings& s, bool cells);
 
-/// Starts a run: standard input and output /dev/null, standard error into the run directory.
-/// Returns the pid, or -1 with `error` set.
+/// Starts a run: standard input /dev/null, standard output `stdoutFile` (/dev/null for a run),
+/// standard error into `stderrFile` (the run directory's stderr.txt). Returns the pid, or -1 with
+/// `error` set.
 pid_t spawnRun(const std::string& executable, const std::vector<std::string>& arguments,
-               const std::filesystem::path& stderrFile, std::string& error);
+               const std::filesystem::path& stderrFile, std::string& error,
+               const std::filesystem::path& stdoutFile = "/dev/null");
+
+/// How a child process ended.
+struct Ended {
+  int status = 0;         ///< its wait status
+  bool timedOut = false;  ///< stopped by pollChild past the timeout
+  int lostErrno = 0;      ///< waitpid failed with this errno (the status is unknown)
+  double seconds = 0;     ///< wall-clock time from its start
+};
+
+/// Polls a child started at `start`: nullopt while it runs within `timeoutS`; past the timeout it
+/// is stopped (stopChildren) and recorded as timed out.
+std::optional<Ended> pollChild(pid_t pid, Clock::time_point start, double timeoutS);
+
+/// The outcome of an ended child, as outcomeOf (or an error when its status was lost).
+Outcome outcomeOfEnded(const std::filesystem::path& runDir, const Ended& ended, double timeoutS);
+
+// --- The runs (experiment.cpp) -----------------------------------------------------------------
+
+/// Prepares run `run` in `runDir` (creates it, writes command.txt) and returns the arguments of
+/// its `ndcontour solve`, with the memory budget shared by `jobs` runs at once. Throws InputError
+/// when the directory cannot be made.
+std::vector<std::string> prepareRun(const ExperimentConfig& config, const ExperimentRun& run,
+                                    const std::filesystem::path& runDir, int jobs);
+
+// --- The Slurm executor (slurm.cpp) --------------------------------------------------------------
+
+/// Runs the pending runs (indices into `runs`) as one Slurm job array of `ndcontour
+/// experiment-task` tasks (slurm.hpp) and calls `finished(i, outcome)` as each run's outcome
+/// appears in the results folder `dir`; `tick` is called while waiting. Returns the Slurm job id
+/// ("" when nothing was submitted). Stops at an interrupt (gInterrupted) after cancelling the
+/// job. Throws InputError when `sbatch` is missing or refuses the job.
+std::string runOnSlurm(const ExperimentConfig& config, const ExperimentOptions& options,
+                       const std::vector<ExperimentRun>& runs, const std::filesystem::path& dir,
+                       const std::vector<std::size_t>& pending,
+                       const std::function<void(std::size_t, const Outcome&)>& finished,
+                       const std::function<void()>& tick);
 
 /// Sets gInterrupted on SIGINT and SIGTERM; restores the previous handlers at scope exit.
 class InterruptScope {

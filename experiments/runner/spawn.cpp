@@ -13,6 +13,7 @@
 #include <csignal>
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -159,11 +160,13 @@ std::vector<std::string> solveArguments(const std::string& problem, const std::s
 }
 
 pid_t spawnRun(const std::string& executable, const std::vector<std::string>& arguments,
-               const fs::path& stderrFile, std::string& error) {
+               const fs::path& stderrFile, std::string& error, const fs::path& stdoutFile) {
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  const std::string out = stdoutFile.string();
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out.c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
   const std::string err = stderrFile.string();
   posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err.c_str(),
                                    O_WRONLY | O_CREAT | O_TRUNC, 0644);
@@ -178,6 +181,32 @@ pid_t spawnRun(const std::string& executable, const std::vector<std::string>& ar
     return -1;
   }
   return pid;
+}
+
+std::optional<Ended> pollChild(pid_t pid, Clock::time_point start, double timeoutS) {
+  Ended e;
+  const pid_t got = ::waitpid(pid, &e.status, WNOHANG);
+  e.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  if (got == 0 && e.seconds > timeoutS) {
+    e.status = stopChildren({pid}).front();
+    e.timedOut = true;
+    return e;
+  }
+  if (got == 0 || (got < 0 && errno == EINTR)) return std::nullopt;
+  if (got < 0) e.lostErrno = errno;
+  return e;
+}
+
+Outcome outcomeOfEnded(const fs::path& runDir, const Ended& ended, double timeoutS) {
+  Outcome o;
+  if (ended.lostErrno != 0) {
+    o.status = "error";
+    o.error = std::string("lost the child process: ") + std::strerror(ended.lostErrno);
+  } else {
+    o = outcomeOf(runDir, ended.status, ended.timedOut, timeoutS);
+  }
+  o.seconds = ended.seconds;
+  return o;
 }
 
 InterruptScope::InterruptScope() {

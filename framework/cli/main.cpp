@@ -45,6 +45,12 @@ int run(int argc, char** argv) {
       app.add_subcommand("experiment", "Run an experiment config: problems x settings x depths");
   ndc::cli::addExperimentOptions(*experiment, experimentOptions);
 
+  // One task of the Slurm executor's job array; started by its batch script, not by hand.
+  ndc::cli::ExperimentTaskOptions taskOptions;
+  CLI::App* task = app.add_subcommand("experiment-task", "Run one task of a Slurm job array");
+  task->group("");
+  ndc::cli::addExperimentTaskOptions(*task, taskOptions);
+
   ndc::cli::ReportOptions reportOptions;
   CLI::App* report = app.add_subcommand("report", "Write the tables, figures and report.md");
   ndc::cli::addReportOptions(*report, reportOptions);
@@ -69,6 +75,7 @@ int run(int argc, char** argv) {
 
   if (bench->parsed()) return ndc::cli::runBench(benchOptions);
   if (report->parsed()) return ndc::cli::runReport(reportOptions);
+  if (task->parsed()) return ndc::cli::runExperimentTaskCommand(taskOptions);
   if (experiment->parsed()) {
     std::string commandLine = "ndcontour";
     for (int i = 1; i < argc; ++i) commandLine += std::string(" ") + argv[i];
