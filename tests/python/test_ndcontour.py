@@ -1,0 +1,157 @@
+"""The Python module against ground truth and against the command line (ctest "python").
+
+Run: PYTHONPATH=build/python python3 -m pytest -q tests/python  (ctest sets NDC_BINARY and
+NDC_SOURCE_DIR; without them the paths default to build/bin/ndcontour and the checkout).
+"""
+
+import os
+import pathlib
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import ndcontour
+
+ROOT = pathlib.Path(os.environ.get("NDC_SOURCE_DIR", pathlib.Path(__file__).resolve().parents[2]))
+BINARY = os.environ.get("NDC_BINARY", str(ROOT / "build" / "bin" / "ndcontour"))
+PROBLEMS = ROOT / "experiments" / "problems"
+
+
+def torus_residual(v, big=1.0, small=0.4):
+    """|F| of the torus (x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4 R^2 (x^2 + y^2) at the vertices."""
+    x, y, z = v[:, 0], v[:, 1], v[:, 2]
+    s = x * x + y * y + z * z + big * big - small * small
+    return np.abs(s * s - 4 * big * big * (x * x + y * y))
+
+
+def test_torus_from_a_path_matches_the_cli_and_lies_on_the_torus(tmp_path):
+    r = ndcontour.solve(str(PROBLEMS / "torus.toml"), depth=4)
+    assert r.n == 3 and r.k == 2
+    assert r.vertices.shape[1] == 3 and r.vertices.dtype == np.float64
+    assert r.simplices.shape[1] == 3 and r.simplices.dtype == np.int64
+    assert r.simplices.min() >= 0 and r.simplices.max() < len(r.vertices)
+    s = r.summary
+    assert s["mesh"]["components"] == 1 and s["mesh"]["euler_characteristic"] == 0
+    assert s["mesh"]["vertices"] == len(r.vertices)
+    assert s["mesh"]["triangles"] == len(r.simplices)
+    assert s["topology"]["certified"] is True
+    assert torus_residual(r.vertices).max() < 1e-9
+    # The same mesh as `ndcontour solve --json`.
+    cli = subprocess.run([BINARY, "solve", str(PROBLEMS / "torus.toml"), "--depth", "4", "--json"],
+                         capture_output=True, text=True, check=True)
+    import json
+    assert json.loads(cli.stdout)["mesh"] == s["mesh"]
+
+
+def test_pathlike_toml_text_and_dict_give_the_same_sphere():
+    path = PROBLEMS / "sphere.toml"
+    text = path.read_text()
+    problem = {
+        "name": "sphere",
+        "description": "The unit sphere S^2 in R^3.",
+        "variables": ["x", "y", "z"],
+        "domain": [[-1.2, 1.2], [-1.2, 1.2], [-1.2, 1.2]],
+        "equations": ["x^2 + y^2 + z^2 - 1"],
+        "expect": {"components": 1, "euler_characteristic": 2},
+    }
+    results = [ndcontour.solve(p, depth=4) for p in (path, text, problem)]
+    for r in results:
+        assert r.summary["mesh"]["euler_characteristic"] == 2
+        expect = r.summary["expect"]
+        assert expect["components"]["ok"] and expect["euler_characteristic"]["ok"]
+        assert np.abs(np.linalg.norm(r.vertices, axis=1) - 1).max() < 1e-12
+    assert all(np.array_equal(results[0].vertices, r.vertices) for r in results[1:])
+    assert all(np.array_equal(results[0].simplices, r.simplices) for r in results[1:])
+
+
+def test_a_curve_in_r4_is_a_closed_polyline():
+    r = ndcontour.solve(PROBLEMS / "space-curve-r4.toml", depth=5)
+    assert r.k == 1 and r.vertices.shape[1] == 4 and r.simplices.shape[1] == 2
+    degree = np.bincount(r.simplices.ravel(), minlength=len(r.vertices))
+    assert (degree == 2).all()  # closed: every vertex on two segments
+
+
+@pytest.mark.parametrize("arguments,keywords", [
+    (["--depth", "0"], {"depth": 0}),
+    (["--bounding", "magic"], {"bounding": "magic"}),
+    (["--scalar", "double", "--precision", "200"], {"scalar": "double", "precision": 200}),
+    (["--tolerance", "-1"], {"tolerance": -1.0}),
+])
+def test_bad_settings_raise_the_cli_message(arguments, keywords):
+    cli = subprocess.run([BINARY, "solve", str(PROBLEMS / "sphere.toml")] + arguments,
+                         capture_output=True, text=True)
+    assert cli.returncode == 2
+    with pytest.raises(ndcontour.InputError) as error:
+        ndcontour.solve(PROBLEMS / "sphere.toml", **keywords)
+    assert str(error.value) == cli.stderr.strip()
+    assert isinstance(error.value, ValueError)
+
+
+def test_bad_problems_raise_the_cli_message(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('name = "bad"\nvariables = ["x", "y"]\ndomain = [[0, 1], [0, 1]]\n'
+                   'equations = ["x^2 + q"]\n')
+    cli = subprocess.run([BINARY, "solve", str(bad)], capture_output=True, text=True)
+    assert cli.returncode == 2
+    with pytest.raises(ndcontour.InputError) as error:
+        ndcontour.solve(str(bad))
+    assert str(error.value) == cli.stderr.strip()
+    with pytest.raises(ndcontour.InputError, match="no such file|cannot|not found|missing"):
+        ndcontour.solve(str(tmp_path / "missing.toml"))
+    with pytest.raises(ndcontour.InputError, match="not a TOML value"):
+        ndcontour.solve({"name": "x", "variables": [object()]})
+    with pytest.raises(ndcontour.InputError, match="unknown keyword"):
+        ndcontour.solve(PROBLEMS / "sphere.toml", detph=3)
+
+
+def test_write_gives_the_files_of_solve_out(tmp_path):
+    r = ndcontour.solve(PROBLEMS / "sphere.toml", depth=3)
+    written = r.write(str(tmp_path / "run"), cells=True)
+    names = sorted(os.path.basename(f) for f in written)
+    assert "mesh.ply" in names and "summary.json" in names and "cells.csv" in names
+    assert all(os.path.exists(f) for f in written)
+    header = (tmp_path / "run" / "mesh.ply").read_bytes()[:200]
+    assert header.startswith(b"ply\nformat binary_little_endian 1.0\n")
+    r.write(str(tmp_path / "ascii"), ascii=True)
+    assert (tmp_path / "ascii" / "mesh.ply").read_bytes().startswith(b"ply\nformat ascii 1.0\n")
+
+
+def test_the_gil_is_released_during_a_solve():
+    ticks = []
+    done = threading.Event()
+
+    def ticker():
+        while not done.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.005)
+
+    thread = threading.Thread(target=ticker)
+    start = time.perf_counter()
+    thread.start()
+    try:
+        ndcontour.solve(PROBLEMS / "torus.toml", depth=6)
+    finally:
+        done.set()
+        thread.join()
+    elapsed = time.perf_counter() - start
+    # The ticker ran all along: with the GIL held it would stop for the whole solve.
+    assert elapsed > 0.1
+    assert len(ticks) >= 0.5 * elapsed / 0.005 * 0.5
+    gaps = np.diff(ticks)
+    assert gaps.max() < max(0.05, elapsed / 4)
+
+
+def test_mpfr_solve_from_python():
+    r = ndcontour.solve(PROBLEMS / "circle.toml", depth=4, scalar="mpfr", precision=100)
+    assert r.summary["settings"]["scalar"] == "mpfr"
+    assert r.summary["mesh"]["components"] == 1
+    # The precision the run used, as the CLI reports it for the same request.
+    cli = subprocess.run([BINARY, "solve", str(PROBLEMS / "circle.toml"), "--depth", "4",
+                          "--scalar", "mpfr", "--precision", "100", "--json"],
+                         capture_output=True, text=True, check=True)
+    import json
+    assert r.summary["settings"] == json.loads(cli.stdout)["settings"]
+    assert r.summary["settings"]["precision_bits"] >= 100
