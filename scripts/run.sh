@@ -88,6 +88,8 @@ if command -v pdflatex > /dev/null 2>&1; then
     echo "run.sh: the paper did not build (see results/paper.log)" >&2
     status=1
   fi
+else
+  echo "run.sh: no paper: pdflatex is not installed (scripts/setup.sh --tex installs TeX, then run scripts/run.sh again)"
 fi
 
 echo "run.sh: $mode run finished in $((SECONDS - start)) s; see results/report.md"
