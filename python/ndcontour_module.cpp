@@ -107,10 +107,13 @@ struct Result {
   py::dict summary() const {
     return py::module_::import("json").attr("loads")(ndc::toJson(run->summary));
   }
-  std::vector<std::string> write(const std::string& dir, bool ascii, bool cells) const {
+  std::vector<std::string> write(const std::string& dir, bool ascii, bool cells, bool vtk,
+                                 bool obj) const {
     ndc::OutputOptions output;
     output.format = ascii ? ndc::PlyFormat::ascii : ndc::PlyFormat::binary;
     output.cells = cells;
+    output.vtk = vtk;
+    output.obj = obj;
     std::vector<std::string> written;
     {
       py::gil_scoped_release release;
@@ -214,9 +217,10 @@ PYBIND11_MODULE(ndcontour, m) {
       .def_property_readonly("summary", &Result::summary,
                              "The summary, the same dict as summary.json (docs/contracts.md).")
       .def("write", &Result::write, py::arg("dir"), py::kw_only(), py::arg("ascii") = false,
-           py::arg("cells") = false,
+           py::arg("cells") = false, py::arg("vtk") = false, py::arg("obj") = false,
            "Writes the files of `ndcontour solve --out DIR` (binary PLY unless ascii; "
-           "cells.csv with cells) and returns their paths.")
+           "cells.csv with cells, mesh.vtu with vtk, mesh.obj with obj) and returns their "
+           "paths.")
       .def("__repr__", [](const Result& r) {
         const auto& mesh = r.run->summary.mesh;
         return "<ndcontour.Result " + r.run->summary.problem + ": n = " + std::to_string(r.run->n) +

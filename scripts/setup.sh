@@ -12,7 +12,7 @@ packages=(
   libeigen3-dev libboost-dev libmpfr-dev libmpfi-dev libgmp-dev
   catch2 doxygen gnuplot-nox libtomlplusplus-dev libcli11-dev libbenchmark-dev
   clang libclang-rt-14-dev
-  python3 python3-dev pybind11-dev python3-numpy python3-pytest
+  python3 python3-dev pybind11-dev python3-numpy python3-pytest python3-meshio
 )
 for arg in "$@"; do
   case "$arg" in

@@ -182,6 +182,8 @@ int runSolve(SolveOptions options, const Problem& problem) {
     OutputOptions output;
     output.format = options.ascii ? PlyFormat::ascii : PlyFormat::binary;
     output.cells = options.cells;
+    output.vtk = options.vtk;
+    output.obj = options.obj;
     written = writeOutputs(*options.outDir, result, output);
   }
   warn(problem, result.summary, options.check);

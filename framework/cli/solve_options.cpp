@@ -123,6 +123,11 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
   solve.add_flag("--cells", o.cells,
                  "Also write cells.csv to --out: one row per solution cell (index, centre, "
                  "class, projected point)");
+  solve.add_flag("--vtk", o.vtk,
+                 "Also write mesh.vtu to --out: VTK XML for ParaView and meshio, with the "
+                 "coordinates u0.. in R^n, the cell class and the singular and uncertified flags");
+  solve.add_flag("--obj", o.obj,
+                 "Also write mesh.obj to --out: Wavefront OBJ (f records, or l for curves)");
   solve
       .add_option("--max-memory", o.maxMemory,
                   "Memory the run may use (K, M, G, T: powers of 1024); a depth that needs more "
@@ -181,8 +186,11 @@ void validateSolveOptions(SolveOptions& o) {
   }
 
   // An existing output must be a directory; the pipeline decides what it may overwrite.
-  if (!o.outDir && (o.ascii || o.cells))
-    throw UsageError(std::string(o.ascii ? "--ascii" : "--cells") +
+  if (!o.outDir && (o.ascii || o.cells || o.vtk || o.obj))
+    throw UsageError(std::string(o.ascii   ? "--ascii"
+                                 : o.cells ? "--cells"
+                                 : o.vtk   ? "--vtk"
+                                           : "--obj") +
                      " needs --out DIR (it chooses the files written there)");
   if (o.outDir) {
     std::error_code ec;

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "framework/core/problem.hpp"
+#include "framework/core/vertex_rows.hpp"
 
 namespace ndc {
 namespace {
@@ -283,46 +284,6 @@ class BinaryBlock {
   std::size_t used_ = 0;
 };
 
-/// The values of the vertex properties of mesh.ply (x y z, u0.., x2 y2 z2), in header order.
-class VertexRows {
- public:
-  explicit VertexRows(const RunResult& r)
-      : r_(r), app_(r.application.get()), second_(app_ && app_->secondImage) {
-    row_.resize(3 + r.n + (second_ ? 3 : 0));
-  }
-  std::size_t count() const { return r_.n ? r_.vertices.size() / r_.n : 0; }
-  std::size_t width() const { return row_.size(); }
-  bool second() const { return second_; }
-
-  /// The row of vertex v (valid until the next call).
-  std::span<const double> operator()(std::size_t v) {
-    const double* p = r_.vertices.data() + v * r_.n;
-    const std::size_t n = static_cast<std::size_t>(r_.n);
-    if (!app_) {
-      // The 3-D image: the first three coordinates, zero-padded.
-      for (std::size_t j = 0; j < 3; ++j) row_[j] = j < n ? p[j] : 0.0;
-      std::copy(p, p + n, row_.begin() + 3);
-      return row_;
-    }
-    // The application's map to R^3, and the surface parameters of B-spline variables.
-    const std::span<const double> x(p, n);
-    const auto image = app_->image(x);
-    std::copy(image.begin(), image.end(), row_.begin());
-    for (std::size_t j = 0; j < n; ++j) row_[3 + j] = app_->parameter(static_cast<int>(j), p[j]);
-    if (second_) {
-      const auto y = (*app_->secondImage)(x);
-      std::copy(y.begin(), y.end(), row_.begin() + 3 + n);
-    }
-    return row_;
-  }
-
- private:
-  const RunResult& r_;
-  const ApplicationData* app_;
-  bool second_;
-  std::vector<double> row_;
-};
-
 /// The header of mesh.ply.
 void meshHeader(std::ostream& out, const RunResult& r, const VertexRows& rows, PlyFormat format) {
   const ApplicationData* app = r.application.get();
@@ -564,6 +525,8 @@ OutputFiles formatOutputs(const RunResult& result, const OutputOptions& options)
   };
   const PlyFormat format = options.format;
   add("mesh.ply", [&](std::ostream& o) { writePly(o, result, format); });
+  if (options.vtk) add("mesh.vtu", [&](std::ostream& o) { writeVtk(o, result); });
+  if (options.obj) add("mesh.obj", [&](std::ostream& o) { writeObj(o, result); });
   if (options.cells) add("cells.csv", [&](std::ostream& o) { writeCellsCsv(o, result); });
   add("singular.csv", [&](std::ostream& o) { writeSingularCsv(o, result); });
   if (!result.summary.topology.certified)
@@ -635,8 +598,8 @@ std::vector<std::string> Staging::publish(const OutputFiles& files) const {
     return std::any_of(files.begin(), files.end(), [&](const auto& f) { return f.first == name; });
   };
   std::error_code error;
-  for (const char* name :
-       {"summary.json", "cells.csv", "input.ply", "ruled.ply", "uncertified.csv"})
+  for (const char* name : {"summary.json", "cells.csv", "mesh.vtu", "mesh.obj", "input.ply",
+                           "ruled.ply", "uncertified.csv"})
     if (std::string(name) == "summary.json" || !written(name)) {
       std::filesystem::remove(dir_ / name, error);
       if (error) abandon((dir_ / name).string() + ": cannot remove the previous output");

@@ -34,6 +34,18 @@ void writeInputPly(std::ostream& out, const TriangleSoup& input,
 void writeRuledPly(std::ostream& out, const RunResult& result,
                    PlyFormat format = PlyFormat::binary);
 
+/// Writes the mesh as VTK XML, an `UnstructuredGrid` for ParaView and meshio (`mesh.vtu`,
+/// `--vtk`): the points `x y z` of mesh.ply, triangles (k = 2) or lines (k = 1), the point data
+/// `u0 .. u{n-1}` (and `x2 y2 z2`) and `singular` (1 at the vertex nearest to a located singular
+/// point, within one edge length), the cell data
+/// `class` (of the base solution cell holding the simplex: 0 normal, 1 abnormal, 2 failed, -1
+/// none) and `uncertified` (1 inside a cell of uncertified.csv). ASCII data.
+void writeVtk(std::ostream& out, const RunResult& result);
+
+/// Writes the mesh as Wavefront OBJ (`mesh.obj`, `--obj`): `v x y z` per vertex as in mesh.ply,
+/// then `f a b c` (k = 2) or `l a b` (k = 1) with 1-based vertex numbers.
+void writeObj(std::ostream& out, const RunResult& result);
+
 /// Writes cells.csv: cell number, multi-index, centre, class, projected point.
 void writeCellsCsv(std::ostream& out, const RunResult& result);
 
@@ -60,9 +72,12 @@ void writeAtomically(const std::filesystem::path& target, const std::string& tex
 struct OutputOptions {
   PlyFormat format = PlyFormat::binary;  ///< of mesh.ply, input.ply and ruled.ply (`--ascii`)
   bool cells = false;                    ///< whether to write cells.csv (`--cells`)
+  bool vtk = false;                      ///< whether to write mesh.vtu (`--vtk`)
+  bool obj = false;                      ///< whether to write mesh.obj (`--obj`)
 };
 
-/// Writes mesh.ply, cells.csv (only with `options.cells`), singular.csv, uncertified.csv when
+/// Writes mesh.ply, mesh.vtu and mesh.obj (only with `options.vtk`, `options.obj`), cells.csv
+/// (only with `options.cells`), singular.csv, uncertified.csv when
 /// the run is not certified (input.ply and ruled.ply for applications that have them) and last
 /// summary.json into `dir` (created if needed); returns the file names written, in that order.
 /// Every file is first written into a hidden staging folder in `dir`
@@ -70,7 +85,8 @@ struct OutputOptions {
 /// Then, with SIGINT and SIGTERM blocked, the previous summary.json is removed and the files
 /// are renamed into place, summary.json (whose presence marks a finished run) last. Throws
 /// ndc::InputError if `dir` cannot be written. A file of an earlier run that this run does not
-/// write (cells.csv without `cells`, input.ply, ruled.ply, uncertified.csv) is removed: the
+/// write (cells.csv without `cells`, mesh.vtu, mesh.obj, input.ply, ruled.ply, uncertified.csv)
+/// is removed: the
 /// folder then holds exactly this run's files.
 std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const RunResult& result,
                                       const OutputOptions& options = {});
