@@ -171,7 +171,8 @@ void jsonCellsAndMesh(std::ostream& o, const Summary& s) {
     << ", \"boundary_components\": " << m.boundaryComponents
     << ", \"nonmanifold_edges\": " << m.nonmanifoldEdges
     << ", \"euler_characteristic\": " << m.eulerCharacteristic << ", \"open_ends\": " << m.openEnds
-    << ", \"branch_vertices\": " << m.branchVertices << "},\n";
+    << ", \"branch_vertices\": " << m.branchVertices
+    << ", \"orientable\": " << (m.orientable ? "true" : "false") << "},\n";
   o << "  \"accuracy\": {\"max_residual\": " << number(m.maxResidual)
     << ", \"max_chord_error\": " << number(m.maxChordError) << "},\n";
 }

@@ -46,6 +46,9 @@ struct MeshStats {
   double maxChordError = 0;  ///< max distance of segment midpoints / triangle centroids to M
   /// Midpoints / centroids whose projection did not converge (left out of maxChordError).
   std::int64_t chordFailures = 0;
+  /// Whether every connected component could be oriented consistently; the simplices of the
+  /// output are oriented so (framework/core/orientation.hpp).
+  bool orientable = true;
 };
 
 /// A point of M where the Jacobian of the constraints loses rank (`diagnostics.singular_points`).

@@ -16,6 +16,7 @@
 #include "framework/core/bernstein.hpp"
 #include "framework/core/budget.hpp"
 #include "framework/core/grid.hpp"
+#include "framework/core/orientation.hpp"
 #include "framework/core/scalar.hpp"
 #include "framework/core/system.hpp"
 #include "framework/pipeline/singular.hpp"
@@ -442,6 +443,7 @@ void writeBack(RunResult& result, const Complex<S>& welded, const SolutionCells&
   const int n = grid.n;
   for (const S& v : welded.vertices) result.vertices.push_back(toDouble(v));
   result.simplices = welded.simplices;
+  result.summary.mesh.orientable = orientSimplices(result.k, result.simplices);
   result.cellIndex = cells.index;
   result.cellClass = classes;
   for (std::size_t c = 0; c < cells.size(); ++c) {

@@ -39,6 +39,11 @@ def test_torus_from_a_path_matches_the_cli_and_lies_on_the_torus(tmp_path):
     assert s["mesh"]["triangles"] == len(r.simplices)
     assert s["topology"]["certified"] is True
     assert torus_residual(r.vertices).max() < 1e-9
+    # Consistently oriented: every directed edge of the closed surface is used once.
+    assert s["mesh"]["orientable"] is True
+    directed = np.concatenate([r.simplices[:, [0, 1]], r.simplices[:, [1, 2]],
+                               r.simplices[:, [2, 0]]])
+    assert len(np.unique(directed, axis=0)) == len(directed)
     # The same mesh as `ndcontour solve --json`.
     cli = subprocess.run([BINARY, "solve", str(PROBLEMS / "torus.toml"), "--depth", "4", "--json"],
                          capture_output=True, text=True, check=True)
