@@ -124,6 +124,16 @@ struct Result {
   }
 };
 
+/// `threads`: 1..kMaxThreads, as `--threads` accepts (the CLI checks it while parsing).
+int threadsOf(const py::handle& value) {
+  const std::string text = py::str(value).cast<std::string>();
+  if (!py::isinstance<py::int_>(value) || py::isinstance<py::bool_>(value) ||
+      value.cast<long long>() < 1 || value.cast<long long>() > ndc::cli::kMaxThreads)
+    throw ndc::UsageError("--threads: '" + text + "' is not an integer in 1.." +
+                          std::to_string(ndc::cli::kMaxThreads));
+  return value.cast<int>();
+}
+
 /// The CLI's settings and checks for the keyword arguments of solve().
 ndc::cli::SolveOptions optionsOf(const py::kwargs& kwargs) {
   ndc::cli::SolveOptions o;
@@ -155,6 +165,8 @@ ndc::cli::SolveOptions optionsOf(const py::kwargs& kwargs) {
       s.jitter = value.cast<std::uint64_t>();
     else if (name == "max_memory")
       o.maxMemory = py::str(value).cast<std::string>();
+    else if (name == "threads")
+      s.threads = threadsOf(value);
     else
       throw ndc::UsageError("solve(): unknown keyword argument '" + name + "'");
   }
@@ -234,7 +246,7 @@ PYBIND11_MODULE(ndcontour, m) {
         "solve(problem, *, depth=6, max_depth=None, tolerance=None, bounding='linearized', "
         "subdivision='binary', projection='newton', classification='paper', "
         "connection='crossing', scalar='double', precision=None, jitter=None, "
-        "max_memory=None)\n\n"
+        "max_memory=None, threads=None)\n\n"
         "Solves a problem: a path (str or os.PathLike), TOML text (a str with a line break) or "
         "a dict of the problem file's tables. The keywords are `ndcontour solve`'s options; "
         "bad input raises ndcontour.InputError (a ValueError) with the CLI's message. The GIL "

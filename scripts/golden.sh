@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Golden outputs for refactoring: records the outputs of a fixed set of solves (every bounding
 # model, both scalars, curves and surfaces, applications) and later compares a new build's
-# outputs with them byte for byte. summary.json is compared without its wall times (timing_s).
+# outputs with them byte for byte. summary.json is compared without its wall times (timing_s)
+# and the thread count (settings.threads; the outputs do not depend on it, docs/performance.md).
 # Every solve writes ASCII PLY and cells.csv (--ascii --cells) when the binary has those options
 # (builds before them always wrote both), so that records of older builds stay comparable.
 #
@@ -47,9 +48,9 @@ runs=(
   "sweep-drop|sweep-silhouette-drop|--depth 4"
 )
 
-# summary.json without the wall times.
+# summary.json without the wall times and the thread count.
 strip_times() {
-  python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); d.pop("timing_s",None); print(json.dumps(d,sort_keys=True,indent=1))' "$1"
+  python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); d.pop("timing_s",None); d.get("settings",{}).pop("threads",None); print(json.dumps(d,sort_keys=True,indent=1))' "$1"
 }
 
 mkdir -p "$dir"

@@ -9,7 +9,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config
-  libeigen3-dev libboost-dev libmpfr-dev libmpfi-dev libgmp-dev
+  libeigen3-dev libboost-dev libmpfr-dev libmpfi-dev libgmp-dev libtbb-dev
   catch2 doxygen gnuplot-nox libtomlplusplus-dev libcli11-dev libbenchmark-dev
   clang libclang-rt-14-dev
   python3 python3-dev pybind11-dev python3-numpy python3-pytest python3-meshio

@@ -24,6 +24,7 @@
 #include "framework/core/errors.hpp"
 #include "framework/core/expectation.hpp"
 #include "framework/core/io.hpp"
+#include "framework/core/parallel.hpp"
 
 namespace ndc {
 namespace fs = std::filesystem;
@@ -108,6 +109,8 @@ std::vector<std::string> prepareRun(const ExperimentConfig& config, const Experi
   Settings shared = run.settings;
   shared.maxMemoryBytes =
       std::max<std::uint64_t>(defaultMemoryBudget() / std::max(1, jobs), 1u << 30);
+  // And its cores: jobs x threads stays at the hardware threads.
+  shared.threads = std::max(1, effectiveThreads(0) / std::max(1, jobs));
   return solveArguments(p.path.string(), runDir.string(), shared, config.cells);
 }
 

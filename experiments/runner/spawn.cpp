@@ -150,6 +150,10 @@ std::vector<std::string> solveArguments(const std::string& problem, const std::s
     a.push_back("--jitter");
     a.push_back(std::to_string(*s.jitter));
   }
+  if (s.threads > 0) {
+    a.push_back("--threads");
+    a.push_back(std::to_string(s.threads));
+  }
   if (s.maxMemoryBytes > 0) {
     a.push_back("--max-memory");
     a.push_back(std::to_string(s.maxMemoryBytes));

@@ -34,6 +34,7 @@ void addBenchOptions(CLI::App& bench, BenchOptions& o) {
   bench.add_option("--jitter", o.jitter, "Grid jitter seed")
       ->check(unsignedUpTo(std::numeric_limits<std::uint64_t>::max()))
       ->type_name("SEED");
+  addThreadsOption(bench, o.settings.threads);
   bench.add_option("--repeat", o.repeat, "Runs per problem (the median is reported)")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();

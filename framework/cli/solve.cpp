@@ -16,6 +16,7 @@
 #include "framework/core/budget.hpp"
 #include "framework/core/expectation.hpp"
 #include "framework/core/io.hpp"
+#include "framework/core/parallel.hpp"
 #include "framework/pipeline/pipeline.hpp"
 
 namespace ndc::cli {
@@ -156,7 +157,11 @@ RunResult solveWithin(const Problem& problem, const Settings& settings) {
 /// the address-space limit that turns an underestimate into std::bad_alloc (exit 2, main.cpp).
 void armBudgets(const SolveOptions& options, const Problem& problem) {
   const Settings& s = options.settings;
-  limitAddressSpace(s.maxMemoryBytes ? s.maxMemoryBytes : defaultMemoryBudget());
+  // Each worker thread maps its own malloc arena (64 MB of address space, little of it
+  // resident) and stack: slack for them on top of the budget.
+  const auto perThread = std::uint64_t{68} << 20;
+  limitAddressSpace((s.maxMemoryBytes ? s.maxMemoryBytes : defaultMemoryBudget()) +
+                    perThread * static_cast<std::uint64_t>(effectiveThreads(s.threads)));
   if (!s.timeoutSeconds) return;
   std::ostringstream line;
   line << problem.path << ": stopped by --timeout after " << *s.timeoutSeconds << " s";

@@ -76,6 +76,23 @@ CLI::Validator unsignedUpTo(std::uint64_t max) {
       "", "unsigned");
 }
 
+void addThreadsOption(CLI::App& app, int& threads) {
+  app.add_option("--threads", threads,
+                 "Worker threads (default: every hardware thread); the outputs are the same "
+                 "whatever the count")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            int value = 0;
+            const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+            if (text.empty() || ec != std::errc() || end != text.data() + text.size() ||
+                value < 1 || value > kMaxThreads)
+              return "'" + text + "' is not an integer in 1.." + std::to_string(kMaxThreads);
+            return "";
+          },
+          "", "threads"))
+      ->type_name("N");
+}
+
 void addSolveOptions(CLI::App& solve, SolveOptions& o) {
   Settings& s = o.settings;
   solve.add_option("problem", o.problemPath, "Problem file (TOML, docs/contracts.md 4.1)")
@@ -140,6 +157,7 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
                   "Stop the solve after this many seconds of wall time (exit status " +
                       std::to_string(kExitTimeout) + "; --out keeps its previous run)")
       ->type_name("SECONDS");
+  addThreadsOption(solve, s.threads);
   solve.add_flag("--json", o.json, "Print the summary (JSON) on standard output, nothing else");
   solve.add_flag("--check", o.check,
                  "Exit with status " + std::to_string(kExitExpectMismatch) +

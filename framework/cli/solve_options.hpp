@@ -67,6 +67,13 @@ inline constexpr const char* kExitStatusHelp =
 /// overflow silently), for `--jitter` of `solve` and `bench`.
 CLI::Validator unsignedUpTo(std::uint64_t max);
 
+/// The most `--threads` accepted.
+inline constexpr int kMaxThreads = 4096;
+
+/// Declares `--threads N` (1..kMaxThreads; unset: every hardware thread) on `app`, writing into
+/// `threads` (Settings::threads), for `solve` and `bench`.
+void addThreadsOption(CLI::App& app, int& threads);
+
 /// Declares the options of the `solve` subcommand on `solve`, writing into `options`.
 void addSolveOptions(CLI::App& solve, SolveOptions& options);
 

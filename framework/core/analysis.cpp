@@ -23,6 +23,8 @@
 #include <unordered_set>
 #include <vector>
 
+#include "framework/core/parallel.hpp"
+
 namespace ndc {
 
 namespace {
@@ -275,28 +277,42 @@ void accuracy(const Complex<S>& welded, const System<S>& system, const Projector
               MeshStats& stats) {
   using std::sqrt;
   const int n = welded.n, k = welded.k;
+  // Residuals and chord errors per vertex and simplex in parallel, each into its own slot;
+  // the maxima are taken afterwards (framework/core/parallel.hpp).
+  std::vector<S> residual(welded.vertexCount());
+  parallelFor(welded.vertexCount(),
+              [&](std::size_t v) { residual[v] = system.maxResidual(welded.vertex(v)); });
   S worstResidual = 0;
-  for (std::size_t v = 0; v < welded.vertexCount(); ++v)
-    worstResidual = std::max<S>(worstResidual, system.maxResidual(welded.vertex(v)));
+  for (const S& r : residual) worstResidual = std::max<S>(worstResidual, r);
   stats.maxResidual = toDouble(worstResidual);
 
+  std::vector<S> chord(welded.simplexCount());
+  std::vector<std::uint8_t> failed(welded.simplexCount(), 0);
+  parallelForBlocks(welded.simplexCount(), [&](std::size_t begin, std::size_t end) {
+    std::vector<S> centre(n), projected(n);
+    for (std::size_t s = begin; s < end; ++s) {
+      std::fill(centre.begin(), centre.end(), S(0));
+      for (std::int32_t i : simplexAt(welded, s)) {
+        const auto x = welded.vertex(i);
+        for (int j = 0; j < n; ++j) centre[j] += x[j];
+      }
+      for (int j = 0; j < n; ++j) centre[j] /= S(k + 1);
+      projected = centre;
+      if (!project || !project(projected).converged) {
+        failed[s] = 1;
+        continue;
+      }
+      S d2 = 0;
+      for (int j = 0; j < n; ++j) d2 += (projected[j] - centre[j]) * (projected[j] - centre[j]);
+      chord[s] = sqrt(d2);
+    }
+  });
   S worstChord = 0;
-  std::vector<S> centre(n), projected(n);
-  for (std::size_t s = 0; s < welded.simplexCount(); ++s) {
-    std::fill(centre.begin(), centre.end(), S(0));
-    for (std::int32_t i : simplexAt(welded, s)) {
-      const auto x = welded.vertex(i);
-      for (int j = 0; j < n; ++j) centre[j] += x[j];
-    }
-    for (int j = 0; j < n; ++j) centre[j] /= S(k + 1);
-    projected = centre;
-    if (!project || !project(projected).converged) {
+  for (std::size_t s = 0; s < chord.size(); ++s) {
+    if (failed[s])
       ++stats.chordFailures;
-      continue;
-    }
-    S d2 = 0;
-    for (int j = 0; j < n; ++j) d2 += (projected[j] - centre[j]) * (projected[j] - centre[j]);
-    worstChord = std::max<S>(worstChord, sqrt(d2));
+    else
+      worstChord = std::max<S>(worstChord, chord[s]);
   }
   stats.maxChordError = toDouble(worstChord);
 }

@@ -154,7 +154,7 @@ void jsonSettings(std::ostream& o, const Summary& s) {
     << ", \"jitter\": " << (t.jitter ? std::to_string(*t.jitter) : "null")
     << ", \"max_depth\": " << s.topology.maxDepth
     << ", \"tolerance\": " << (t.tolerance > 0 ? number(t.tolerance) : std::string("null"))
-    << ", \"parameters\": {";
+    << ", \"threads\": " << t.threads << ", \"parameters\": {";
   for (std::size_t i = 0; i < s.parameters.size(); ++i)
     o << (i ? ", " : "") << jsonQuoted(s.parameters[i].first) << ": " << s.parameters[i].second;
   o << "}},\n";

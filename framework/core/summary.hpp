@@ -32,6 +32,9 @@ struct Settings {
   /// Chord error the mesh should stay below (`--tolerance`): the crossing connection refines
   /// the leaves whose mesh pieces are farther from M (docs/certificate.md); 0: none.
   double tolerance = 0;
+  /// Worker threads of the run (`--threads`); 0: every hardware thread. The outputs do not
+  /// depend on it (docs/performance.md, "Threads"); summary.json records the count used.
+  int threads = 0;
 };
 
 /// Mesh statistics after welding identical vertices (`mesh` in summary.json).

@@ -17,6 +17,7 @@
 #include "framework/core/budget.hpp"
 #include "framework/core/grid.hpp"
 #include "framework/core/orientation.hpp"
+#include "framework/core/parallel.hpp"
 #include "framework/core/scalar.hpp"
 #include "framework/core/system.hpp"
 #include "framework/pipeline/singular.hpp"
@@ -335,6 +336,7 @@ void describeRun(Summary& summary, const Problem& problem, const Settings& setti
   summary.k = problem.k();
   summary.settings = settings;
   summary.settings.precisionBits = precisionBits;
+  summary.settings.threads = effectiveThreads(settings.threads);
   summary.settings.bounding = choices.bounding.name;
   summary.settings.subdivision = choices.subdivision.name;
   summary.settings.projection = choices.projection.name;
@@ -604,8 +606,11 @@ RunResult runPipeline(const Problem& problem, const Settings& settings, const Pr
       throw InputError(o.str());
     }
   }
-  if (settings.scalar == "double") return run<double>(problem, settings, choices, progress);
-  if (settings.scalar == "mpfr") {
+  if (settings.scalar != "double" && settings.scalar != "mpfr")
+    throw InputError("unknown scalar '" + settings.scalar + "' (expected double or mpfr)");
+  // Every parallel loop of the run uses the arena of --threads (framework/core/parallel.hpp).
+  return withThreads(settings.threads, [&] {
+    if (settings.scalar == "double") return run<double>(problem, settings, choices, progress);
     // The run's precision applies to this run only: restore the caller's afterwards.
     struct Restore {
       unsigned bits = mpfrPrecision();
@@ -613,8 +618,7 @@ RunResult runPipeline(const Problem& problem, const Settings& settings, const Pr
     } restore;
     setMpfrPrecision(settings.precisionBits);
     return run<Mpfr>(problem, settings, choices, progress);
-  }
-  throw InputError("unknown scalar '" + settings.scalar + "' (expected double or mpfr)");
+  });
 }
 
 }  // namespace ndc

@@ -18,6 +18,7 @@
 #include "framework/core/cell_forms.hpp"
 #include "framework/core/interval.hpp"
 #include "framework/core/iteration.hpp"
+#include "framework/core/parallel.hpp"
 #include "strategies/connection/cell_tree.hpp"
 #include "strategies/connection/certificate.hpp"
 
@@ -825,6 +826,14 @@ class AdaptiveCrossing {
     std::vector<S> margins;
   };
 
+  /// The patches of one leaf, restricted on first use, and the graph tests' scratch.
+  struct LeafTests {
+    std::vector<Bernstein<S>> patches;
+    std::vector<Interval<S>> jacobian;
+    GraphTest<S> test;
+    bool ready = false;
+  };
+
   const RootForms& rootForms(std::span<const std::int32_t> index, int level) {
     const std::vector<Bernstein<S>>& forms = cellForms_.root(index, level);
     auto it = rootForms_.find(&forms);
@@ -849,24 +858,46 @@ class AdaptiveCrossing {
   /// set F = t c, t in [0, 1], meets it either (M itself, and the isotopy from M to M_c).
   bool restrictTo(std::int32_t leaf) {
     const RootForms& rf = rootForms(tree_.index(leaf), tree_.level(leaf));
-    const Box<S> box = leafBox(leaf);
-    patches_.resize(m_);
     margins_ = rf.margins;
-    bool empty = false, band = false;
-    for (int i = 0; i < m_; ++i) {
-      patches_[i] = (*rf.forms)[i].restrict(box);
-      const S c = level_[i];
-      empty = empty || clearsRange(patches_[i], c, c, rf.margins[i]);
-      band = band ||
-             clearsRange(patches_[i], std::min<S>(S(0), c), std::max<S>(S(0), c), rf.margins[i]);
-    }
+    bool band = false;
+    const bool empty = restrictLeaf(leaf, rf, patches_, band);
     bandEmpty_.resize(tree_.size(), 0);
     bandEmpty_[leaf] = band;
     return empty;
   }
 
-  /// Solves face (axes, side) of `leaf` (patches_ hold the leaf's patches).
-  FaceResult<S> solveFace(std::int32_t leaf, const std::array<int, 2>& axes, int side) {
+  /// restrictTo without its side effects (safe in parallel tasks): the leaf's patches into
+  /// `patches`, whether M_c misses the closed leaf (returned) and whether the band does.
+  bool restrictLeaf(std::int32_t leaf, const RootForms& rf, std::vector<Bernstein<S>>& patches,
+                    bool& band) const {
+    const Box<S> box = leafBox(leaf);
+    patches.resize(m_);
+    bool empty = false;
+    band = false;
+    for (int i = 0; i < m_; ++i) {
+      patches[i] = (*rf.forms)[i].restrict(box);
+      const S c = level_[i];
+      empty = empty || clearsRange(patches[i], c, c, rf.margins[i]);
+      band = band ||
+             clearsRange(patches[i], std::min<S>(S(0), c), std::max<S>(S(0), c), rf.margins[i]);
+    }
+    return empty;
+  }
+
+  /// The root forms of every leaf in `leaves` (rootForms, which fills its cache: call it
+  /// before a parallel loop reads them).
+  std::vector<const RootForms*> rootFormsOf(const std::vector<std::int32_t>& leaves) {
+    std::vector<const RootForms*> forms;
+    forms.reserve(leaves.size());
+    for (std::int32_t c : leaves) forms.push_back(&rootForms(tree_.index(c), tree_.level(c)));
+    return forms;
+  }
+
+  /// Solves face (axes, side) of `leaf`, whose patches and margins are given (restrictLeaf);
+  /// reads only, so faces are solved in parallel (a FaceSolver per call).
+  FaceResult<S> solveFace(std::int32_t leaf, const std::array<int, 2>& axes, int side,
+                          const std::vector<Bernstein<S>>& patches,
+                          std::span<const S> margins) const {
     const Box<S> box = leafBox(leaf);
     const auto ci = tree_.index(leaf);
     const std::int64_t top = tree_.grid(tree_.level(leaf)).cellsPerAxis();
@@ -882,7 +913,7 @@ class AdaptiveCrossing {
     // Slice the highest fixed axis first so the lower axis numbers stay valid.
     std::vector<Bernstein<S>> face(m_);
     for (int i = 0; i < m_; ++i) {
-      face[i] = patches_[i];
+      face[i] = patches[i];
       for (int t = k_ - 1; t >= 0; --t) {
         const bool upper = (side >> t) & 1;
         face[i] = face[i].faceSlice(axes[t], upper);
@@ -892,7 +923,7 @@ class AdaptiveCrossing {
     std::vector<std::vector<S>> roots;
     FaceSolver<S> solver(in_.system, maxFaceDepth_, level_, position_.slack);
     FaceResult<S> r;
-    r.certain = solver.solve(point, freeAxes, face, ends, roots, margins_);
+    r.certain = solver.solve(point, freeAxes, face, ends, roots, margins);
     r.proven = solver.proven();
     r.withinRounding = solver.withinRounding();
     if (m_ > 1) r.degenerate = position_.nearBoundary(roots, box, freeAxes, ends);
@@ -907,77 +938,208 @@ class AdaptiveCrossing {
   /// One pass over the minimal m-faces of the active leaves: the polygons of the crossed ones
   /// (excluded base cells around a crossed face become touch leaves, walked in turn) and the
   /// leaves next to a face whose crossings are not proven. Returns the degenerate crossings.
+  /// The faces are solved ahead, in parallel (prefetchFaces); the walk itself is sequential.
   std::int64_t crossFaces() {
     polygons_.clear();
     rootPoints_.clear();
     unprovenFaces_.clear();
     unprovenOf_.clear();
     unprovenOfEmpty_.clear();
+    prefetched_.clear();
+    prefetchFrom_ = prefetchEnd_ = 0;
     std::int64_t degenerate = 0;
-    std::vector<std::int32_t> corner(n_), position(n_);
+    std::vector<std::int32_t> corner(n_);
     std::array<Occupant, 4> around;
-    const int quadrants = 1 << k_;
-    const auto faceTypes = static_cast<std::uint64_t>(fixedAxes_.size()) << k_;
+    touchLeaves_.clear();
     for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
       if (!tree_.active(c)) continue;
+      // The next window of leaves (the touch leaves added so far among them).
+      if (c >= prefetchEnd_) prefetchFaces(c);
       grow();
-      bool restricted = false;
+      bool restricted = false, ready = false;  // bandEmpty_[c] is set; patches_ are c's
       if (empty_[c] < 0) {
-        empty_[c] = restrictTo(c) ? 1 : 0;
+        empty_[c] = restrictOnce(c, ready) ? 1 : 0;
         restricted = true;
       }
       if (empty_[c] == 1) continue;  // no level set between M and M_c meets it
       const int level = tree_.level(c);
       // A copy: touch leaves added below may move the tree's index storage.
       const std::vector<std::int32_t> ci(tree_.index(c).begin(), tree_.index(c).end());
-      for (std::size_t a = 0; a < fixedAxes_.size(); ++a) {
-        const auto& axes = fixedAxes_[a];
-        for (int side = 0; side < quadrants; ++side) {
-          std::copy(ci.begin(), ci.end(), corner.begin());
-          for (int t = 0; t < k_; ++t) corner[axes[t]] += (side >> t) & 1;
-          // The regions around the face in cyclic order (k = 2): (-a,-b), (+a,-b), (+a,+b),
-          // (-a,+b). A finer region means the face is not minimal: its parts belong to the
-          // finer leaves. The face belongs to the first leaf of its own level.
-          bool minimal = true, owner = true;
-          for (int q = 0; q < quadrants && minimal; ++q) {
-            const int bits = k_ == 1 ? q : (q == 0 ? 0 : q == 1 ? 1 : q == 2 ? 3 : 2);
-            std::copy(corner.begin(), corner.end(), position.begin());
-            for (int t = 0; t < k_; ++t) position[axes[t]] += ((bits >> t) & 1) - 1;
-            around[q] = tree_.find(level, position);
-            minimal = around[q].kind != Occ::kFiner;
-            if (around[q].kind == Occ::kLeaf && tree_.level(around[q].leaf) == level &&
-                around[q].leaf < c)
-              owner = false;
+      const bool known = c >= prefetchFrom_ && c < prefetchEnd_;
+      const std::vector<OwnedFace> all = known ? std::vector<OwnedFace>() : ownedFaces(c);
+      for (const OwnedFace& f : known ? prefetched_[c].owned : all) {
+        faceAround(ci, f, corner, around);
+        const std::uint64_t key = faceKey(c, f.a, f.side);
+        auto it = faces_.find(key);
+        if (it == faces_.end()) {
+          if (!restricted) {
+            restrictOnce(c, ready);
+            restricted = true;
           }
-          if (!minimal || !owner) continue;
-          const std::uint64_t key =
-              static_cast<std::uint64_t>(c) * faceTypes + (a << k_) + std::uint64_t(side);
-          auto it = faces_.find(key);
-          if (it == faces_.end()) {
-            if (!restricted) {
-              restrictTo(c);
-              restricted = true;
-            }
-            it = faces_.emplace(key, solveFace(c, axes, side)).first;
-          }
-          degenerate += addFace(it->second, around, FaceRef{level, corner, axes});
+          it = faces_.emplace(key, faceResult(c, f.a, f.side, key, ready)).first;
         }
+        degenerate += addFace(it->second, around, level, corner, fixedAxes_[f.a]);
       }
     }
+    prefetched_.clear();
     return degenerate;
+  }
+
+  /// A minimal m-face a leaf owns: its kind (a, side) and the leaves around it (kLeaf; any
+  /// other region is looked up again by faceAround).
+  struct OwnedFace {
+    std::uint8_t a = 0, side = 0;
+    std::array<Occupant, 4> around;  ///< as found when the list was made
+  };
+
+  /// The faces leaf c owns, in the order crossFaces walks them. Touch leaves, which crossFaces
+  /// adds at excluded base cells, change neither which faces are minimal (a base-level leaf
+  /// where there was none is never finer) nor who owns them (a touch leaf comes after every
+  /// leaf already there), so this list stays valid for the whole walk.
+  std::vector<OwnedFace> ownedFaces(std::int32_t c) const {
+    const int level = tree_.level(c);
+    const std::vector<std::int32_t> ci(tree_.index(c).begin(), tree_.index(c).end());
+    std::vector<std::int32_t> corner(n_), position(n_);
+    std::array<Occupant, 4> around;
+    std::vector<OwnedFace> out;
+    for (std::size_t a = 0; a < fixedAxes_.size(); ++a) {
+      for (int side = 0; side < (1 << k_); ++side) {
+        if (!ownedFace(level, ci, a, side, corner, position, around, c)) continue;
+        out.push_back({static_cast<std::uint8_t>(a), static_cast<std::uint8_t>(side), around});
+      }
+    }
+    return out;
+  }
+
+  /// The lower corner of an owned face and the regions around it now: as recorded, except
+  /// an excluded base cell that a touch leaf has filled since (what CellTree::find says now).
+  void faceAround(const std::vector<std::int32_t>& ci, const OwnedFace& f,
+                  std::vector<std::int32_t>& corner, std::array<Occupant, 4>& around) const {
+    const auto& axes = fixedAxes_[f.a];
+    std::copy(ci.begin(), ci.end(), corner.begin());
+    for (int t = 0; t < k_; ++t) corner[axes[t]] += (f.side >> t) & 1;
+    around = f.around;
+    for (int q = 0; q < (1 << k_); ++q) {
+      if (around[q].kind != Occ::kEmpty) continue;
+      const auto it = touchLeaves_.find(around[q].key);
+      if (it != touchLeaves_.end()) around[q] = Occupant{Occ::kLeaf, it->second, 0};
+    }
+  }
+
+  /// The key of face (a, side) of leaf c in faces_.
+  std::uint64_t faceKey(std::int32_t c, std::size_t a, int side) const {
+    const auto faceTypes = static_cast<std::uint64_t>(fixedAxes_.size()) << k_;
+    return static_cast<std::uint64_t>(c) * faceTypes + (a << k_) + std::uint64_t(side);
+  }
+
+  /// Whether face (a, side) of leaf c (at `level`, index ci) is a minimal m-face that c owns;
+  /// its lower corner into `corner`, the regions around it into `around` (`position`: scratch).
+  bool ownedFace(int level, const std::vector<std::int32_t>& ci, std::size_t a, int side,
+                 std::vector<std::int32_t>& corner, std::vector<std::int32_t>& position,
+                 std::array<Occupant, 4>& around, std::int32_t c) const {
+    const auto& axes = fixedAxes_[a];
+    std::copy(ci.begin(), ci.end(), corner.begin());
+    for (int t = 0; t < k_; ++t) corner[axes[t]] += (side >> t) & 1;
+    // The regions around the face in cyclic order (k = 2): (-a,-b), (+a,-b), (+a,+b),
+    // (-a,+b). A finer region means the face is not minimal: its parts belong to the
+    // finer leaves. The face belongs to the first leaf of its own level.
+    bool minimal = true, owner = true;
+    for (int q = 0; q < (1 << k_) && minimal; ++q) {
+      const int bits = k_ == 1 ? q : (q == 0 ? 0 : q == 1 ? 1 : q == 2 ? 3 : 2);
+      std::copy(corner.begin(), corner.end(), position.begin());
+      for (int t = 0; t < k_; ++t) position[axes[t]] += ((bits >> t) & 1) - 1;
+      around[q] = tree_.find(level, position);
+      minimal = around[q].kind != Occ::kFiner;
+      if (around[q].kind == Occ::kLeaf && tree_.level(around[q].leaf) == level &&
+          around[q].leaf < c)
+        owner = false;
+    }
+    return minimal && owner;
+  }
+
+  /// restrictTo(c), or its answer from prefetchFaces (then patches_ are not c's and `ready`
+  /// stays false).
+  bool restrictOnce(std::int32_t c, bool& ready) {
+    if (std::size_t(c) < prefetched_.size() && prefetched_[c].empty >= 0) {
+      bandEmpty_.resize(tree_.size(), 0);
+      bandEmpty_[c] = prefetched_[c].band;
+      return prefetched_[c].empty == 1;
+    }
+    ready = true;
+    return restrictTo(c);
+  }
+
+  /// The solution of face (a, side) of leaf c: prefetchFaces's, or solved now.
+  FaceResult<S> faceResult(std::int32_t c, std::size_t a, int side, std::uint64_t key,
+                           bool& ready) {
+    if (std::size_t(c) < prefetched_.size()) {
+      for (auto& [at, result] : prefetched_[c].faces) {
+        if (at == key) return std::move(result);
+      }
+    }
+    if (!ready) restrictTo(c);
+    ready = true;
+    return solveFace(c, fixedAxes_[a], side, patches_, margins_);
+  }
+
+  /// What prefetchLeaf found for one leaf ahead of crossFaces.
+  struct LeafFaces {
+    std::int8_t empty = -1;  ///< restrictLeaf's answer (-1: not restricted)
+    std::int8_t band = 0;    ///< and its band
+    std::vector<std::pair<std::uint64_t, FaceResult<S>>> faces;  ///< by key
+    std::vector<OwnedFace> owned;  ///< ownedFaces (when the leaf may be crossed)
+  };
+
+  /// The parallel part of crossFaces: each active leaf that may be crossed is a task that
+  /// restricts it and solves the faces it owns that faces_ does not hold yet, writing only its
+  /// slot of prefetched_ (reads only otherwise), for a window of kPrefetchWindow leaves from
+  /// `from` on (so that the slots' memory stays bounded; the touch leaves the walk adds come
+  /// in the last windows). crossFaces then walks the leaves in order as
+  /// before and takes these answers instead of computing them, so nothing it does depends on
+  /// the order in which the tasks ran.
+  void prefetchFaces(std::int32_t from) {
+    // The previous window's slots are spent: free them (in parallel too).
+    parallelFor(std::size_t(prefetchEnd_ - prefetchFrom_),
+                [&](std::size_t i) { prefetched_[prefetchFrom_ + i] = LeafFaces{}; });
+    grow();
+    const auto end = std::min(static_cast<std::int32_t>(tree_.size()), from + kPrefetchWindow);
+    std::vector<std::int32_t> leaves;
+    for (std::int32_t c = from; c < end; ++c) {
+      if (tree_.active(c) && empty_[c] != 1) leaves.push_back(c);
+    }
+    const std::vector<const RootForms*> forms = rootFormsOf(leaves);
+    prefetched_.resize(tree_.size());
+    prefetchFrom_ = from;
+    prefetchEnd_ = end;
+    parallelFor(leaves.size(),
+                [&](std::size_t i) { prefetchLeaf(leaves[i], *forms[i], prefetched_[leaves[i]]); });
+  }
+
+  /// One task of prefetchFaces.
+  void prefetchLeaf(std::int32_t c, const RootForms& rf, LeafFaces& out) const {
+    std::vector<Bernstein<S>> patches;
+    const auto prepare = [&] {
+      if (out.empty >= 0) return;
+      bool band = false;
+      out.empty = restrictLeaf(c, rf, patches, band) ? 1 : 0;
+      out.band = band ? 1 : 0;
+    };
+    if (empty_[c] < 0) prepare();
+    if ((empty_[c] < 0 ? out.empty : empty_[c]) == 1) return;
+    out.owned = ownedFaces(c);
+    for (const OwnedFace& f : out.owned) {
+      const std::uint64_t key = faceKey(c, f.a, f.side);
+      if (faces_.count(key)) continue;
+      prepare();
+      out.faces.emplace_back(key, solveFace(c, fixedAxes_[f.a], f.side, patches, rf.margins));
+    }
   }
 
   /// Records a solved face: flags its leaves when the face is not proven, and adds its
   /// polygon (|degree| copies) when it is crossed. Returns its degenerate crossings.
-  std::int64_t addFace(const FaceResult<S>& r, std::array<Occupant, 4>& around,
-                       const FaceRef& face) {
+  std::int64_t addFace(const FaceResult<S>& r, std::array<Occupant, 4>& around, int level,
+                       const std::vector<std::int32_t>& corner, const std::array<int, 2>& axes) {
     const int quadrants = 1 << k_;
-    std::vector<S> centre(n_);
-    const Grid& g = tree_.grid(face.level);
-    for (int j = 0; j < n_; ++j) {
-      const bool fixed = j == face.axes[0] || (k_ == 2 && j == face.axes[1]);
-      centre[j] = domain_.lo[j] + S((face.corner[j] + (fixed ? 0.0 : 0.5)) * g.cellWidth(j));
-    }
     const bool unproven = !r.proven || r.roots > 1 || std::abs(r.degree) > 1 || r.degenerate;
     const bool singular = !r.certain || std::abs(r.degree) > 1;
     // Roots the face solver could not isolate at its finest face level, or within rounding
@@ -990,11 +1152,12 @@ class AdaptiveCrossing {
       if (unproven) unproven_[around[q].leaf] = 1;
       if (singular) singular_[around[q].leaf] = 1;
       if (unproven)
-        setTrouble(around[q].leaf,
-                   r.roots > 0 ? std::span<const S>(r.root) : std::span<const S>(centre));
+        setTrouble(around[q].leaf, r.roots > 0
+                                       ? std::span<const S>(r.root)
+                                       : std::span<const S>(faceCentre(level, corner, axes)));
     }
     if (r.degree == 0) {
-      if (unproven) recordUnproven(around, face);
+      if (unproven) recordUnproven(around, FaceRef{level, corner, axes});
       return r.degenerate;
     }
     Polygon p;
@@ -1006,6 +1169,7 @@ class AdaptiveCrossing {
         grid_.unpack(around[q].key, index);
         around[q].kind = Occ::kLeaf;
         around[q].leaf = tree_.addLeaf(grid_.depth, index, false);
+        touchLeaves_.emplace(around[q].key, around[q].leaf);
         grow();
         if (unproven) unproven_[around[q].leaf] = 1;
         if (singular) singular_[around[q].leaf] = 1;
@@ -1020,11 +1184,23 @@ class AdaptiveCrossing {
       p.node[p.size++] = node;
     }
     if (p.size > 1 && p.node[p.size - 1] == p.node[0]) --p.size;
-    if (unproven) recordUnproven(around, face);
+    if (unproven) recordUnproven(around, FaceRef{level, corner, axes});
     p.root = static_cast<std::int32_t>(rootPoints_.size() / n_);
     rootPoints_.insert(rootPoints_.end(), r.root.begin(), r.root.end());
     for (int copy = 0; copy < std::abs(r.degree); ++copy) polygons_.push_back(p);
     return r.degenerate;
+  }
+
+  /// The centre of the face of `level` with lower corner `corner` and fixed axes `axes`.
+  std::vector<S> faceCentre(int level, const std::vector<std::int32_t>& corner,
+                            const std::array<int, 2>& axes) const {
+    std::vector<S> centre(n_);
+    const Grid& g = tree_.grid(level);
+    for (int j = 0; j < n_; ++j) {
+      const bool fixed = j == axes[0] || (k_ == 2 && j == axes[1]);
+      centre[j] = domain_.lo[j] + S((corner[j] + (fixed ? 0.0 : 0.5)) * g.cellWidth(j));
+    }
+    return centre;
   }
 
   /// The leaves around an unproven face (-1 for other regions), for the blocks' test.
@@ -1115,30 +1291,34 @@ class AdaptiveCrossing {
 
   /// The graph test of a leaf's box (cached): M_c ∩ leaf is proven a graph over k of the
   /// coordinates (J enclosed by the widened derivative hulls of the leaf's patches).
-  bool cellGraph(std::int32_t leaf) {
+  bool cellGraph(std::int32_t leaf, const RootForms& rf, LeafTests& t) {
     if (graph_[leaf] < 0) {
-      restrictTo(leaf);
-      graph_[leaf] = patchesGraph();
+      prepare(leaf, rf, t);
+      graph_[leaf] = graphOf(t.patches, rf.margins, t.jacobian, t.test);
     }
     return graph_[leaf] == 1;
   }
 
   /// The graph test of the box of patches_.
-  bool patchesGraph() {
-    jacobian_.assign(std::size_t(m_) * n_, Interval<S>());
+  bool patchesGraph() { return graphOf(patches_, margins_, jacobian_, graphTest_); }
+
+  /// The graph test of the box of `patches` (jacobian: scratch; test: graphTest_ or a copy).
+  bool graphOf(const std::vector<Bernstein<S>>& patches, std::span<const S> margins,
+               std::vector<Interval<S>>& jacobian, GraphTest<S>& test) const {
+    jacobian.assign(std::size_t(m_) * n_, Interval<S>());
     for (int i = 0; i < m_; ++i) {
       for (int j = 0; j < n_; ++j)
-        jacobian_[std::size_t(i) * n_ + j] = derivativeHull(patches_[i], j, margins_[i]);
+        jacobian[std::size_t(i) * n_ + j] = derivativeHull(patches[i], j, margins[i]);
     }
     std::vector<int> axes(n_);
     std::iota(axes.begin(), axes.end(), 0);
-    return graphTest_.graph(jacobian_, axes);
+    return test.graph(jacobian, axes);
   }
 
   /// Whether interval evaluation proves that M_c (with `band`: no level set between M and M_c)
   /// does not meet `box`; for m = 1, the sign rule's level set F = -delta: F >= 0 or F < 0 on
   /// the box. Catches what coefficient hulls miss, such as y^2 on a box around y = 0.
-  bool intervalEmpty(const Box<S>& box, bool band) {
+  bool intervalEmpty(const Box<S>& box, bool band) const {
     using I = Interval<S>;
     std::vector<I> x;
     for (int j = 0; j < n_; ++j) x.emplace_back(box.lo[j], box.hi[j]);
@@ -1154,10 +1334,11 @@ class AdaptiveCrossing {
 
   /// k = 2: the graph test of every (n-1)-face of a leaf (cached): M_c ∩ face is empty or a
   /// graph over one coordinate, so no closed curve of M_c lies inside a face.
-  bool facesGraph(std::int32_t leaf) {
+  bool facesGraph(std::int32_t leaf, const RootForms& rf, LeafTests& t) {
     if (faceGraph_[leaf] < 0) {
-      restrictTo(leaf);
-      const int failed = failingFace();
+      prepare(leaf, rf, t);
+      const int failed =
+          firstFailing(failingFacesOf(t.patches, rf.margins, false, t.jacobian, t.test));
       faceGraph_[leaf] = failed < 0;
       if (failed >= 0) faceTrouble(leaf, failed / 2, failed % 2 == 1);
     }
@@ -1176,11 +1357,19 @@ class AdaptiveCrossing {
   /// The faces of the box of patches_ that fail the face graph test, as (fixed axis, upper):
   /// every one, or (`all` false) the first.
   std::vector<std::pair<int, bool>> failingFaces(bool all = true) {
+    return failingFacesOf(patches_, margins_, all, jacobian_, graphTest_);
+  }
+
+  /// failingFaces of the box of `patches` (jacobian: scratch; test: graphTest_ or a copy).
+  std::vector<std::pair<int, bool>> failingFacesOf(const std::vector<Bernstein<S>>& patches,
+                                                   std::span<const S> margins, bool all,
+                                                   std::vector<Interval<S>>& jacobian,
+                                                   GraphTest<S>& test) const {
     std::vector<std::pair<int, bool>> failing;
     for (int a = 0; a < n_; ++a) {
       const std::vector<int> axes = freeAxes(a);
       for (int side = 0; side < 2; ++side) {
-        if (faceGraph(a, side == 1, axes)) continue;
+        if (faceGraphOf(patches, margins, a, side == 1, axes, jacobian, test)) continue;
         failing.emplace_back(a, side == 1);
         if (!all) return failing;
       }
@@ -1189,8 +1378,7 @@ class AdaptiveCrossing {
   }
 
   /// The first face (2 a + side) of the box of patches_ that fails the face graph test, or -1.
-  int failingFace() {
-    const auto failing = failingFaces(false);
+  static int firstFailing(const std::vector<std::pair<int, bool>>& failing) {
     return failing.empty() ? -1 : 2 * failing.front().first + int(failing.front().second);
   }
 
@@ -1215,20 +1403,27 @@ class AdaptiveCrossing {
   /// The graph test of one face of the leaf in patches_ (fixed axis a at its lower or upper
   /// end): empty, or a graph over one of the free axes.
   bool faceGraph(int a, bool upper, const std::vector<int>& axes) {
-    jacobian_.assign(std::size_t(m_) * n_, Interval<S>());
+    return faceGraphOf(patches_, margins_, a, upper, axes, jacobian_, graphTest_);
+  }
+
+  /// faceGraph on the box of `patches` (jacobian: scratch; test: graphTest_ or a copy).
+  bool faceGraphOf(const std::vector<Bernstein<S>>& patches, std::span<const S> margins, int a,
+                   bool upper, const std::vector<int>& axes, std::vector<Interval<S>>& jacobian,
+                   GraphTest<S>& test) const {
+    jacobian.assign(std::size_t(m_) * n_, Interval<S>());
     for (int i = 0; i < m_; ++i) {
-      const Bernstein<S> face = patches_[i].faceSlice(a, upper);
-      if (clearsRange(face, level_[i], level_[i], margins_[i])) return true;
+      const Bernstein<S> face = patches[i].faceSlice(a, upper);
+      if (clearsRange(face, level_[i], level_[i], margins[i])) return true;
       for (int j : axes)
-        jacobian_[std::size_t(i) * n_ + j] = derivativeHull(face, j < a ? j : j - 1, margins_[i]);
+        jacobian[std::size_t(i) * n_ + j] = derivativeHull(face, j < a ? j : j - 1, margins[i]);
     }
-    if (graphTest_.graph(jacobian_, axes)) return true;
-    Box<S> face = patches_.front().domain();
+    if (test.graph(jacobian, axes)) return true;
+    Box<S> face = patches.front().domain();
     face.lo[a] = face.hi[a] = upper ? face.hi[a] : face.lo[a];
     // Near a point where M is tangent to the face's hyperplane no block is regular, and M
     // usually misses the face although each equation alone meets it.
     return combinationExcludes(in_.system, std::span<const S>(level_), face,
-                               std::span<const Interval<S>>(jacobian_), axes) ||
+                               std::span<const Interval<S>>(jacobian), axes) ||
            intervalEmpty(face, false);
   }
 
@@ -1241,27 +1436,47 @@ class AdaptiveCrossing {
           incident[polygons_[p].node[i]].push_back(static_cast<std::int32_t>(p));
       }
     }
+    std::fill(failure_.begin(), failure_.end(), Failure::kNone);
+    std::vector<std::int32_t> leaves;
     for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
-      failure_[c] = Failure::kNone;
-      if (!tree_.active(c)) continue;
-      if (empty_[c] == 1) {
-        // M_c misses the leaf; M may not (it lies 1e-8 h away): where it meets the leaf, the
-        // isotopy from M to M_c needs the Jacobian's rank there.
-        if (!bandEmpty_[c] && !cellGraph(c) && !intervalEmpty(leafBox(c), true))
-          failure_[c] = Failure::kGraph;
-        continue;
-      }
-      if (unproven_[c]) {
-        failure_[c] = Failure::kCrossing;
-      } else if (!cellGraph(c) && !intervalEmpty(leafBox(c), true)) {
-        failure_[c] = Failure::kGraph;
-      } else if (k_ == 2 && !facesGraph(c)) {
-        failure_[c] = Failure::kFaceGraph;
-      } else if (!simpleLink(c, polygons_, incident[c])) {
-        failure_[c] = Failure::kLink;
-      }
+      if (tree_.active(c)) leaves.push_back(c);
     }
+    grow();  // certifyLeaf writes per-leaf slots only: none may grow now
+    const std::vector<const RootForms*> forms = rootFormsOf(leaves);
+    parallelFor(leaves.size(),
+                [&](std::size_t i) { certifyLeaf(leaves[i], *forms[i], incident[leaves[i]]); });
     mergeBlocks(incident);
+  }
+
+  /// The certificate of active leaf c into failure_[c]. It writes only what belongs to c (its
+  /// failure, its cached graph tests and its trouble point), so certify runs the leaves in
+  /// parallel and the result does not depend on their order.
+  void certifyLeaf(std::int32_t c, const RootForms& rf, const std::vector<std::int32_t>& ps) {
+    LeafTests t{{}, {}, graphTest_};
+    if (empty_[c] == 1) {
+      // M_c misses the leaf; M may not (it lies 1e-8 h away): where it meets the leaf, the
+      // isotopy from M to M_c needs the Jacobian's rank there.
+      if (!bandEmpty_[c] && !cellGraph(c, rf, t) && !intervalEmpty(leafBox(c), true))
+        failure_[c] = Failure::kGraph;
+      return;
+    }
+    if (unproven_[c]) {
+      failure_[c] = Failure::kCrossing;
+    } else if (!cellGraph(c, rf, t) && !intervalEmpty(leafBox(c), true)) {
+      failure_[c] = Failure::kGraph;
+    } else if (k_ == 2 && !facesGraph(c, rf, t)) {
+      failure_[c] = Failure::kFaceGraph;
+    } else if (!simpleLink(c, polygons_, ps)) {
+      failure_[c] = Failure::kLink;
+    }
+  }
+
+  /// The leaf's patches into t (once).
+  void prepare(std::int32_t leaf, const RootForms& rf, LeafTests& t) const {
+    if (t.ready) return;
+    bool band = false;
+    restrictLeaf(leaf, rf, t.patches, band);
+    t.ready = true;
   }
 
   /// Tangency (docs/certificate.md, "Blocks"): where M touches a grid hyperplane, M_c crosses
@@ -1492,6 +1707,7 @@ class AdaptiveCrossing {
     box.hi = cellBox(tree_.grid(level), domain_, hi).hi;
     const RootForms& rf = rootForms(lo, level);
     margins_ = rf.margins;
+    patches_.resize(m_);  // restrictTo may not have run (prefetchFaces, certifyLeaf)
     for (int i = 0; i < m_; ++i) patches_[i] = (*rf.forms)[i].restrict(box);
     if (!patchesGraph() && !intervalEmpty(box, true)) return false;
     if (k_ == 2) {
@@ -1678,12 +1894,16 @@ class AdaptiveCrossing {
         budgetSpent_ = true;
         return degenerate;
       }
-      for (std::int32_t c : refine) {
-        const Box<double> box = cellBox(tree_.grid(tree_.level(c)), grid_.domain, tree_.index(c));
-        const std::vector<std::uint8_t> children = in_.refine(box);
-        solutionChildren_ += static_cast<std::size_t>(
-            std::count_if(children.begin(), children.end(), [](std::uint8_t f) { return f != 0; }));
-        tree_.refine(c, children);
+      // The children's bounding tests in parallel, the tree's growth in order.
+      std::vector<std::vector<std::uint8_t>> children(refine.size());
+      parallelFor(refine.size(), [&](std::size_t i) {
+        const std::int32_t c = refine[i];
+        children[i] = in_.refine(cellBox(tree_.grid(tree_.level(c)), grid_.domain, tree_.index(c)));
+      });
+      for (std::size_t i = 0; i < refine.size(); ++i) {
+        solutionChildren_ += static_cast<std::size_t>(std::count_if(
+            children[i].begin(), children[i].end(), [](std::uint8_t f) { return f != 0; }));
+        tree_.refine(refine[i], children[i]);
         ++refined_;
       }
       grow();
@@ -1851,15 +2071,45 @@ class AdaptiveCrossing {
     };
     // piece[p * 4 + i]: the piece of M in leaf node[i] that polygon p belongs to.
     std::vector<std::int32_t> piece(polygons_.size() * 4, 0), pieceCount(count, 0);
-    for (std::size_t c = 0; c < count; ++c)
-      pieceCount[c] = pieces(c, incident[c], piece, slotOf, out);
+    // Each leaf writes its own slots of piece (its position in each incident polygon).
+    std::vector<std::uint8_t> ambiguous(count, 0);
+    parallelFor(count, [&](std::size_t c) {
+      pieceCount[c] = pieces(c, incident[c], piece, slotOf, ambiguous[c]);
+    });
+    for (std::uint8_t a : ambiguous) out.ambiguousCells += a;
     // Dual vertices: the Newton projection of the mean of each piece's crossings.
+    const std::vector<DualVertex> vertices = dualVertices(incident, piece, pieceCount, slotOf);
     std::vector<std::int32_t> firstVertex(count, -1);
-    std::vector<S> sums, x(n_);
+    for (const DualVertex& d : vertices) {
+      if (!d.converged) ++out.offManifoldVertices;  // reported, never written silently off M
+      const std::int32_t v = out.complex.addVertex(d.x, tree_.baseCell(d.leaf));
+      if (d.piece == 0) firstVertex[d.leaf] = v;
+      if (d.piece == 0 && (singular_[d.leaf] || d.singular)) ++out.singularCells;
+    }
+    for (std::int32_t p : mesh) addSimplices(polygons_[p], p, firstVertex, piece, out);
+  }
+
+  /// A dual vertex: piece `piece` of M in leaf `leaf`, at x.
+  struct DualVertex {
+    std::int32_t leaf = 0;
+    std::int32_t piece = 0;
+    std::vector<S> x;        ///< the projection of the mean of its crossings, or that mean
+    bool converged = false;  ///< whether the projection converged
+    bool singular = false;   ///< the Jacobian at x is (nearly) rank-deficient
+  };
+
+  /// The dual vertices in leaf and piece order: the means of the pieces' crossings in order,
+  /// then their projections onto M in parallel (each into its own slot).
+  template <class SlotOf>
+  std::vector<DualVertex> dualVertices(const std::vector<std::vector<std::int32_t>>& incident,
+                                       const std::vector<std::int32_t>& piece,
+                                       const std::vector<std::int32_t>& pieceCount,
+                                       const SlotOf& slotOf) const {
+    std::vector<DualVertex> out;
+    std::vector<S> sums;
     std::vector<std::int32_t> counts;
-    for (std::size_t c = 0; c < count; ++c) {
+    for (std::size_t c = 0; c < pieceCount.size(); ++c) {
       if (pieceCount[c] == 0) continue;
-      const S width = S(tree_.grid(tree_.level(c)).cellWidth(0));
       sums.assign(std::size_t(pieceCount[c]) * n_, S(0));
       counts.assign(pieceCount[c], 0);
       for (std::int32_t p : incident[c]) {
@@ -1869,37 +2119,40 @@ class AdaptiveCrossing {
         ++counts[q];
       }
       for (int q = 0; q < pieceCount[c]; ++q) {
-        for (int j = 0; j < n_; ++j) x[j] = sums[std::size_t(q) * n_ + j] / counts[q];
-        const std::vector<S> mean = x;
-        if (!in_.project(x).converged) {
-          // Reported, never written silently off M (the analysis measures its residual too).
-          x = mean;
-          ++out.offManifoldVertices;
-        }
-        const std::int32_t v = out.complex.addVertex(x, tree_.baseCell(std::int32_t(c)));
-        if (q == 0) firstVertex[c] = v;
-        // Singular cells: the Jacobian at the vertex is (nearly) rank-deficient relative to
-        // the cell size, as at self-intersections and cone points.
-        const Vector<S> sigma = singularValuesAt<S>(in_.system, x);
-        if (q == 0 && (singular_[c] || sigma(0) == 0 || sigma(m_ - 1) <= sigma(0) * width * 1e-3))
-          ++out.singularCells;
+        DualVertex d{static_cast<std::int32_t>(c), q, std::vector<S>(n_)};
+        for (int j = 0; j < n_; ++j) d.x[j] = sums[std::size_t(q) * n_ + j] / counts[q];
+        out.push_back(std::move(d));
       }
     }
-    for (std::int32_t p : mesh) addSimplices(polygons_[p], p, firstVertex, piece, out);
+    parallelFor(out.size(), [&](std::size_t i) { projectVertex(out[i]); });
+    return out;
+  }
+
+  /// Projects a dual vertex onto M (keeping the mean where Newton fails) and tests whether
+  /// its cell is singular: the Jacobian at the vertex (nearly) rank-deficient relative to the
+  /// cell size, as at self-intersections and cone points.
+  void projectVertex(DualVertex& d) const {
+    const std::vector<S> mean = d.x;
+    d.converged = in_.project(d.x).converged;
+    if (!d.converged) d.x = mean;
+    if (d.piece != 0) return;
+    const S width = S(tree_.grid(tree_.level(d.leaf)).cellWidth(0));
+    const Vector<S> sigma = singularValuesAt<S>(in_.system, d.x);
+    d.singular = sigma(0) == 0 || sigma(m_ - 1) <= sigma(0) * width * 1e-3;
   }
 
   /// The pieces of M in leaf c: for k = 2 the components of the link of its vertex (one edge
   /// per incident polygon, between the polygon's two nodes next to c), one per sheet of M in
-  /// the leaf; for k = 1 one. Counts the leaves whose piece is not simple.
+  /// the leaf; for k = 1 one. `ambiguous`: set when the piece is not simple.
   template <class SlotOf>
   std::int32_t pieces(std::size_t c, const std::vector<std::int32_t>& ps,
                       std::vector<std::int32_t>& piece, const SlotOf& slotOf,
-                      ConnectionOutput<S>& out) const {
+                      std::uint8_t& ambiguous) const {
     if (ps.empty()) return 0;
     const bool boundary = onDomainBoundary(static_cast<std::int32_t>(c));
     if (k_ == 1) {
       for (std::int32_t p : ps) piece[p * 4 + slotOf(p, c)] = 0;
-      if (ps.size() != 2 && !(boundary && ps.size() == 1)) ++out.ambiguousCells;
+      if (ps.size() != 2 && !(boundary && ps.size() == 1)) ambiguous = 1;
       return 1;
     }
     std::vector<std::int64_t> nodes;
@@ -1925,7 +2178,7 @@ class AdaptiveCrossing {
       simple = simple && d <= 2;
     }
     simple = simple && (ends == 0 || (boundary && ends == 2));
-    if (!simple) ++out.ambiguousCells;
+    if (!simple) ambiguous = 1;
     return components;
   }
 
@@ -1998,6 +2251,11 @@ class AdaptiveCrossing {
   std::vector<std::int8_t> empty_, bandEmpty_;
   std::vector<std::uint8_t> unproven_, stuck_, singular_;
   std::vector<std::int8_t> graph_, faceGraph_;
+  std::vector<LeafFaces> prefetched_;  ///< prefetchFaces, per leaf, for one crossFaces
+  CellMap<std::int32_t> touchLeaves_;  ///< the touch leaves of one crossFaces, by base key
+  std::int32_t prefetchFrom_ = 0, prefetchEnd_ = 0;  ///< the leaves prefetched_ holds
+  /// Leaves per window of prefetchFaces: enough tasks for many threads, a few MB of slots.
+  static constexpr std::int32_t kPrefetchWindow = 4096;
   std::vector<Failure> failure_;
   std::vector<S> trouble_;  ///< n per leaf: where its certificate failed (setTrouble)
   std::vector<std::uint8_t> hasTrouble_;

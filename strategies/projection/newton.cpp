@@ -10,6 +10,7 @@
 
 #include "framework/core/errors.hpp"
 #include "framework/core/iteration.hpp"
+#include "framework/core/parallel.hpp"
 
 namespace ndc {
 
@@ -148,22 +149,25 @@ Projections<S> projectCells(const Projection<S>& projection, const SolutionCells
   out.point.resize(count * n);
   out.converged.resize(count);
   out.iterations.resize(count);
-  const std::size_t every = std::max<std::size_t>(1, count / 100);
   //! [project-cells]
-  // One dispatch for the whole stage, not one per cell.
+  // One dispatch for the whole stage, not one per cell; the cells in parallel, each writing its
+  // own slots (framework/core/parallel.hpp), in blocks so that progress is reported in order.
   std::visit(
       [&](const auto& strategy) {
-        for (std::size_t c = 0; c < count; ++c) {
-          // Alg. 1: start from the centroid of the cell's closed box.
-          const Box<S> box = cellBox<S>(cells.grid, domain, cells.cell(c));
-          std::span<S> x(out.point.data() + c * n, static_cast<std::size_t>(n));
-          for (int j = 0; j < n; ++j) x[j] = (box.lo[j] + box.hi[j]) / 2;
-          const ProjectedPoint<S> r = strategy.project(x);
-          out.converged[c] = r.converged ? 1 : 0;
-          out.iterations[c] = r.iterations;
-          if (progress && (c + 1) % every == 0) {
-            progress("projection", static_cast<double>(c + 1) / static_cast<double>(count));
-          }
+        const std::size_t block = std::max<std::size_t>(1024, count / 100);
+        for (std::size_t first = 0; first < count; first += block) {
+          const std::size_t size = std::min(block, count - first);
+          parallelFor(size, [&](std::size_t i) {
+            const std::size_t c = first + i;
+            // Alg. 1: start from the centroid of the cell's closed box.
+            const Box<S> box = cellBox<S>(cells.grid, domain, cells.cell(c));
+            std::span<S> x(out.point.data() + c * n, static_cast<std::size_t>(n));
+            for (int j = 0; j < n; ++j) x[j] = (box.lo[j] + box.hi[j]) / 2;
+            const ProjectedPoint<S> r = strategy.project(x);
+            out.converged[c] = r.converged ? 1 : 0;
+            out.iterations[c] = r.iterations;
+          });
+          if (progress) progress("projection", double(first + size) / double(count));
         }
       },
       projection);

@@ -1,10 +1,15 @@
 #include "strategies/subdivision/subdivision.hpp"
 
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <span>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
+
+#include "framework/core/parallel.hpp"
 
 namespace ndc {
 
@@ -32,13 +37,36 @@ Subdivision createSubdivision(std::string_view spec) {
 
 namespace {
 
+/// The solution cells of one subtree of a parallel traversal: their indices, n per cell.
+struct CellList {
+  int n = 0;
+  std::int64_t visited = 0;
+  std::vector<std::int32_t> index;
+
+  std::size_t size() const { return index.size() / static_cast<std::size_t>(n); }
+  void add(std::span<const std::int32_t> cell) {
+    index.insert(index.end(), cell.begin(), cell.end());
+  }
+};
+
+/// A kept box where the sequential top of a parallel traversal stops: its state, depth and
+/// multi-index; its subtree is one task.
+template <class State>
+struct Subtree {
+  State state;
+  std::vector<std::int32_t> index;
+};
+
 /// The depth-first traversal for one concrete bounding B and subdivision D (monomorphic: the
-/// strategies are resolved once, by subdivide's std::visit).
-template <class B, class D>
+/// strategies are resolved once, by subdivide's std::visit), writing the solution cells into
+/// `Out` (SolutionCells, or a CellList for one subtree of a parallel traversal).
+template <class B, class D, class Out>
 class Traversal {
  public:
+  using State = typename B::State;
+
   Traversal(const B& bounding, const D& subdivision, const Grid& grid, const Progress& progress,
-            SolutionCells& cells, std::int64_t maxCells)
+            Out& cells, std::int64_t maxCells)
       : maxCells_(maxCells),
         bounding_(bounding),
         subdivision_(subdivision),
@@ -51,16 +79,37 @@ class Traversal {
         children_(static_cast<std::size_t>(depth_) + 1) {}
 
   void run() {
-    typename B::State root;
+    State root;
     bounding_.root(root);
     if (keep(root, 0)) descend(root, 0);
     report(1.0);
   }
 
+  /// The top of a parallel traversal: like run(), but the kept boxes of depth `depth` (below
+  /// the final one) are not expanded; they go to `subtrees` in depth-first order.
+  void runTop(int depth, std::vector<Subtree<State>>& subtrees) {
+    stopAt_ = depth;
+    subtrees_ = &subtrees;
+    State root;
+    bounding_.root(root);
+    if (keep(root, 0)) descend(root, 0);
+  }
+
+  /// One subtree of a parallel traversal: the kept box `top` of depth `depth`, expanded as
+  /// run() would; `found` counts the solution cells of every subtree (the budget).
+  void runSubtree(const Subtree<State>& top, int depth, std::atomic<std::int64_t>& found) {
+    found_ = &found;
+    index_ = top.index;
+    descend(top.state, depth);
+  }
+
+  /// The volume share of the boxes finished so far (discarded, or solution cells).
+  double doneVolume() const { return doneVolume_; }
+
  private:
   //! [zerosetsubdiv]
   // Bounds the box of depth d if the subdivision says so; false: the box is discarded.
-  bool keep(const typename B::State& state, int d) {
+  bool keep(const State& state, int d) {
     if (!subdivision_.boundsAfter(d, n_)) return true;
     ++cells_.visited;
     if (bounding_.mayContainZero(state)) return true;
@@ -70,13 +119,13 @@ class Traversal {
 
   // Expands a kept box of depth d: a leaf is a solution cell, an inner box is halved along
   // axis d mod n and its children (lower first) are visited depth first.
-  void descend(const typename B::State& state, int d) {
+  void descend(const State& state, int d) {
+    if (d == stopAt_) {
+      subtrees_->push_back({state, index_});
+      return;
+    }
     if (d == depth_) {
-      if (maxCells_ > 0 && static_cast<std::int64_t>(cells_.size()) >= maxCells_) {
-        throw CellBudgetExceeded("more than " + std::to_string(maxCells_) +
-                                 " solution cells: the budget for this depth and k");
-      }
-      cells_.add(index_);
+      addCell();
       done(d);
       return;
     }
@@ -91,6 +140,17 @@ class Traversal {
     index_[axis] /= 2;
   }
   //! [zerosetsubdiv]
+
+  // A solution cell, within the budget (of this traversal, or of all subtrees: found_).
+  void addCell() {
+    const std::int64_t before = found_ ? found_->fetch_add(1, std::memory_order_relaxed)
+                                       : static_cast<std::int64_t>(cells_.size());
+    if (maxCells_ > 0 && before >= maxCells_) {
+      throw CellBudgetExceeded("more than " + std::to_string(maxCells_) +
+                               " solution cells: the budget for this depth and k");
+    }
+    cells_.add(index_);
+  }
 
   // A box of depth d is finished (discarded or a solution cell): its share of the domain's
   // volume is done.
@@ -112,12 +172,61 @@ class Traversal {
   const int n_;
   const int depth_;  // n L halvings
   const Progress& progress_;
-  SolutionCells& cells_;
+  Out& cells_;
   std::vector<std::int32_t> index_;  // multi-index of the current box at its own resolution
-  std::vector<std::pair<typename B::State, typename B::State>> children_;
+  std::vector<std::pair<State, State>> children_;
   double doneVolume_ = 0.0;
   double nextReport_ = 0.01;
+  int stopAt_ = -1;                                  // runTop: where the subtrees start
+  std::vector<Subtree<State>>* subtrees_ = nullptr;  // runTop: the subtrees found
+  std::atomic<std::int64_t>* found_ = nullptr;       // runSubtree: cells of every subtree
 };
+
+/// The depth where a parallel traversal hands its subtrees to tasks: about 2^kTopLevels boxes
+/// per axis, so that a k-manifold leaves some hundreds of subtrees (enough to balance 64
+/// threads; each subtree's cost grows with its share of M). -1: the tree is too shallow to
+/// split (then the traversal is sequential).
+int topDepth(const Grid& grid) {
+  constexpr int kTopLevels = 3;
+  const int depth = grid.n * std::min(kTopLevels, grid.depth - 2);
+  return depth > 0 ? depth : -1;
+}
+
+/// ZeroSetSubdiv with the subtrees below topDepth as parallel tasks (framework/core/
+/// parallel.hpp): the top is traversed sequentially, each subtree writes its own CellList, and
+/// the lists are appended in depth-first order of their roots. So the cells, their order and
+/// `visited` are those of the sequential traversal, and the budget is exceeded in the same
+/// runs (the cells are counted across subtrees).
+template <class B, class D>
+void parallelTraversal(const B& bounding, const D& subdivision, const Grid& grid,
+                       const Progress& progress, SolutionCells& cells, std::int64_t maxCells,
+                       int top) {
+  using State = typename B::State;
+  std::vector<Subtree<State>> subtrees;
+  Traversal<B, D, SolutionCells> head(bounding, subdivision, grid, progress, cells, maxCells);
+  head.runTop(top, subtrees);
+  std::vector<CellList> parts(subtrees.size(), CellList{grid.n});
+  std::atomic<std::int64_t> found{0};
+  std::atomic<std::size_t> finished{0};
+  const auto caller = std::this_thread::get_id();
+  const double share = std::ldexp(1.0, -top), before = head.doneVolume();
+  const Progress none;
+  parallelFor(subtrees.size(), [&](std::size_t i) {
+    const B local = bounding;  // the bounding's scratch is per instance
+    Traversal<B, D, CellList> t(local, subdivision, grid, none, parts[i], maxCells);
+    t.runSubtree(subtrees[i], top, found);
+    const std::size_t done = finished.fetch_add(1, std::memory_order_relaxed) + 1;
+    // Progress from the caller's thread only (the callback need not be thread safe).
+    if (progress && std::this_thread::get_id() == caller)
+      progress("subdivision", std::min(1.0, before + double(done) * share));
+  });
+  for (const CellList& part : parts) {
+    cells.visited += part.visited;
+    for (std::size_t c = 0; c < part.size(); ++c)
+      cells.add(std::span<const std::int32_t>(part.index.data() + c * grid.n, grid.n));
+  }
+  if (progress) progress("subdivision", 1.0);
+}
 
 }  // namespace
 
@@ -135,10 +244,16 @@ SolutionCells subdivide(const Bounding<S>& bounding, const Subdivision& subdivis
   SolutionCells cells;
   cells.grid = grid;
   // Dispatch once: the whole traversal is monomorphic in (bounding, subdivision).
+  const int top = topDepth(grid);
   std::visit(
       [&](const auto& b, const auto& d) {
-        Traversal<std::decay_t<decltype(b)>, std::decay_t<decltype(d)>> traversal(
-            b, d, grid, progress, cells, maxCells);
+        using B = std::decay_t<decltype(b)>;
+        using D = std::decay_t<decltype(d)>;
+        if (top > 0) {
+          parallelTraversal(b, d, grid, progress, cells, maxCells, top);
+          return;
+        }
+        Traversal<B, D, SolutionCells> traversal(b, d, grid, progress, cells, maxCells);
         traversal.run();
       },
       bounding, subdivision);

@@ -160,3 +160,14 @@ def test_mpfr_solve_from_python():
     import json
     assert r.summary["settings"] == json.loads(cli.stdout)["settings"]
     assert r.summary["settings"]["precision_bits"] >= 100
+
+
+def test_threads_give_the_same_mesh_and_bad_counts_raise():
+    one = ndcontour.solve(PROBLEMS / "clifford-torus.toml", depth=4, threads=1)
+    two = ndcontour.solve(PROBLEMS / "clifford-torus.toml", depth=4, threads=2)
+    assert np.array_equal(one.vertices, two.vertices)
+    assert np.array_equal(one.simplices, two.simplices)
+    assert one.summary["settings"]["threads"] == 1 and two.summary["settings"]["threads"] == 2
+    for bad in (0, -1, 5000, 1.5, "two", True):
+        with pytest.raises(ndcontour.InputError, match=r"--threads: .* is not an integer in 1\.\.4096"):
+            ndcontour.solve(PROBLEMS / "sphere.toml", threads=bad)

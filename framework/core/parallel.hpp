@@ -1,0 +1,86 @@
+/// \file parallel.hpp
+/// The task scheduler of `--threads` (oneTBB; docs/performance.md, "Threads"). Every parallel
+/// loop of the pipeline has one shape: work item i writes its result into slot i of a vector
+/// sized before the loop, and the caller then merges the slots sequentially in index order, so
+/// the outputs are the same, bit for bit, whatever the number of threads and however the
+/// scheduler splits and steals the work. No loop takes a lock; the slots are the only shared
+/// state written, each by one task.
+#pragma once
+
+#include <tbb/blocked_range.h>
+#include <tbb/info.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <cstddef>
+#include <utility>
+
+#include "framework/core/scalar.hpp"
+
+namespace ndc {
+
+/// The worker threads a run with `requested` threads uses: `requested`, or every hardware
+/// thread for 0.
+inline int effectiveThreads(int requested) {
+  return requested > 0 ? requested : tbb::info::default_concurrency();
+}
+
+/// Keeps a worker thread's MPFR default precision at the caller's for the duration of a task.
+/// Boost 1.74 keeps it in one process-wide variable (then this only reads it); later Boost
+/// versions keep it per thread, and then a worker set it here.
+class WorkerPrecision {
+ public:
+  explicit WorkerPrecision(unsigned bits) : saved_(mpfrPrecision()) {
+    if (saved_ != bits) setMpfrPrecision(bits);
+  }
+  ~WorkerPrecision() {
+    if (mpfrPrecision() != saved_) setMpfrPrecision(saved_);
+  }
+  WorkerPrecision(const WorkerPrecision&) = delete;
+  WorkerPrecision& operator=(const WorkerPrecision&) = delete;
+
+ private:
+  unsigned saved_;
+};
+
+/// Calls `body(i)` for every i in [0, count) on the current task arena (the run's, sized by
+/// `--threads`), in any order and on any thread: `body` must only read shared state and write
+/// what belongs to item i. Worker threads see the caller's MPFR precision. Exceptions reach the
+/// caller (oneTBB cancels the rest of the loop). `grain`: the fewest items of one task.
+template <class Body>
+void parallelFor(std::size_t count, Body&& body, std::size_t grain = 1) {
+  if (count == 0) return;
+  if (count == 1) {
+    body(std::size_t{0});
+    return;
+  }
+  const unsigned bits = mpfrPrecision();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, grain),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      const WorkerPrecision precision(bits);
+                      for (std::size_t i = range.begin(); i != range.end(); ++i) body(i);
+                    });
+}
+
+/// parallelFor over blocks: `body(begin, end)` for disjoint ranges covering [0, count), so a
+/// task can keep its scratch for a whole block (same rules as parallelFor).
+template <class Body>
+void parallelForBlocks(std::size_t count, Body&& body, std::size_t grain = 1) {
+  if (count == 0) return;
+  const unsigned bits = mpfrPrecision();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, grain),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      const WorkerPrecision precision(bits);
+                      body(range.begin(), range.end());
+                    });
+}
+
+/// Runs `f()` on a task arena of `threads` worker threads (0: every hardware thread), so that
+/// every parallelFor inside it uses at most that many; returns what `f` returns.
+template <class F>
+decltype(auto) withThreads(int threads, F&& f) {
+  tbb::task_arena arena(effectiveThreads(threads));
+  return arena.execute(std::forward<F>(f));
+}
+
+}  // namespace ndc

@@ -1,0 +1,148 @@
+// `--threads N`: the outputs do not depend on the number of threads (docs/performance.md,
+// "Threads"). The tool runs as a process with 1, 2 and 3 threads (3 oversubscribes a 2-core
+// machine, so tasks are interleaved and stolen differently), and every output file is compared
+// byte for byte; of summary.json only the wall times (`timing_s`) and `settings.threads` may
+// differ.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "framework/applications/load.hpp"
+#include "framework/pipeline/pipeline.hpp"
+#include "tests/test_process.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using ndc::test::quoted;
+using ndc::test::slurp;
+
+/// The output files a solve may write into --out (with --ascii --cells).
+const std::vector<std::string> kOutputs = {"mesh.ply",    "cells.csv",       "singular.csv",
+                                           "input.ply",   "uncertified.csv", "ruled.ply",
+                                           "summary.json"};
+
+/// summary.json without what may depend on the thread count: the line of `timing_s` (wall
+/// times) and the value of `settings.threads`.
+std::string comparable(const std::string& summary) {
+  static const std::regex timing("\n  \"timing_s\": [^\n]*");
+  static const std::regex threads("\"threads\": [0-9]+");
+  return std::regex_replace(std::regex_replace(summary, timing, ""), threads, "\"threads\": _");
+}
+
+/// Solves `problem` (a file of experiments/problems) with `options` and `--threads threads`
+/// into scratch/out-THREADS; returns the output folder.
+fs::path solve(const fs::path& scratch, const std::string& problem, const std::string& options,
+               int threads) {
+  const fs::path out = scratch / ("out-" + std::to_string(threads));
+  fs::remove_all(out);
+  const fs::path file = fs::path(ndc::test::sourceDir()) / "experiments/problems" / problem;
+  const auto run = ndc::test::runNdcontour(
+      "solve " + quoted(file.string()) + " " + options + " --ascii --cells --threads " +
+          std::to_string(threads) + " --out " + quoted(out.string()),
+      scratch);
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  return out;
+}
+
+/// Every output of `--threads 2` and `--threads 3` equals that of `--threads 1`.
+void sameWhateverThreads(const std::string& problem, const std::string& options) {
+  INFO(problem << " " << options);
+  ndc::test::ScratchDir scratch("threads");
+  const fs::path one = solve(scratch.path(), problem, options, 1);
+  const std::string summary = slurp(one / "summary.json");
+  REQUIRE(summary.find("\"threads\": 1,") != std::string::npos);
+  for (int threads : {2, 3}) {
+    INFO("--threads " << threads);
+    const fs::path other = solve(scratch.path(), problem, options, threads);
+    CHECK(slurp(other / "summary.json").find("\"threads\": " + std::to_string(threads) + ",") !=
+          std::string::npos);
+    for (const std::string& name : kOutputs) {
+      INFO(name);
+      REQUIRE(fs::exists(one / name) == fs::exists(other / name));
+      if (!fs::exists(one / name)) continue;
+      if (name == "summary.json")
+        CHECK(comparable(slurp(other / name)) == comparable(summary));
+      else
+        CHECK(slurp(other / name) == slurp(one / name));
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("threads: a torus in R^3, outputs identical with 1, 2 and 3 threads", "[threads]") {
+  sameWhateverThreads("torus.toml", "--depth 5");
+}
+
+TEST_CASE("threads: curves in R^2 and R^4, outputs identical with 1, 2 and 3 threads",
+          "[threads]") {
+  sameWhateverThreads("circle.toml", "--depth 6");
+  sameWhateverThreads("space-curve-r4.toml", "--depth 5");
+}
+
+TEST_CASE("threads: surfaces in R^4 and R^6, outputs identical with 1, 2 and 3 threads",
+          "[threads]") {
+  sameWhateverThreads("clifford-torus.toml", "--depth 4");
+  sameWhateverThreads("torus-r6.toml", "--depth 3");
+}
+
+TEST_CASE("threads: refinement, certified and not, outputs identical with 1, 2 and 3 threads",
+          "[threads]") {
+  // genus2 at depth 4 refines about 5000 cells to certify; at depth 5 without refinement it
+  // is not certified (blocks, uncertified.csv).
+  sameWhateverThreads("genus2.toml", "--depth 4");
+  sameWhateverThreads("genus2.toml", "--depth 5 --max-depth 5");
+}
+
+TEST_CASE("threads: MPFR at 200 bits, outputs identical with 1, 2 and 3 threads", "[threads]") {
+  sameWhateverThreads("two-circles.toml", "--depth 5 --scalar mpfr --precision 200");
+  sameWhateverThreads("clifford-torus.toml", "--depth 3 --scalar mpfr --precision 200");
+}
+
+TEST_CASE("threads: bisector application, outputs identical with 1, 2 and 3 threads", "[threads]") {
+  sameWhateverThreads("bisector-fig8a.toml", "--depth 4");
+}
+
+TEST_CASE("threads: runPipeline gives the same result with 1 and 2 threads", "[threads]") {
+  const ndc::Problem problem =
+      ndc::loadProblem(fs::path(ndc::test::sourceDir()) / "experiments/problems/sphere-r4.toml");
+  ndc::Settings settings;
+  settings.depth = 4;
+  settings.threads = 1;
+  const ndc::RunResult one = ndc::runPipeline(problem, settings);
+  settings.threads = 2;
+  const ndc::RunResult two = ndc::runPipeline(problem, settings);
+  CHECK(one.summary.settings.threads == 1);
+  CHECK(two.summary.settings.threads == 2);
+  CHECK(two.vertices == one.vertices);  // exact, not approximate
+  CHECK(two.simplices == one.simplices);
+  CHECK(two.cellIndex == one.cellIndex);
+  CHECK(two.cellPoint == one.cellPoint);
+  CHECK(two.summary.visited == one.summary.visited);
+  CHECK(two.summary.topology.certified == one.summary.topology.certified);
+  CHECK(two.summary.mesh.maxChordError == one.summary.mesh.maxChordError);
+}
+
+TEST_CASE("threads: --threads takes an integer from 1 to 4096, else exit 2 with one line",
+          "[threads][cli]") {
+  ndc::test::ScratchDir scratch("threads-cli");
+  const std::string file =
+      quoted(ndc::test::sourceDir() + "/experiments/problems/circle.toml") + " --depth 3";
+  for (const std::string bad : {"0", "-1", "two", "4097", "1.5", ""}) {
+    INFO("--threads '" << bad << "'");
+    const auto run =
+        ndc::test::runNdcontour("solve " + file + " --threads " + quoted(bad), scratch.path());
+    CHECK(run.status == 2);
+    CHECK(std::count(run.err.begin(), run.err.end(), '\n') == 1);
+  }
+  const auto run = ndc::test::runNdcontour("solve " + file + " --threads 1 --json", scratch.path());
+  CHECK(run.status == 0);
+  CHECK(run.out.find("\"threads\": 1,") != std::string::npos);
+}
