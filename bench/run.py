@@ -29,13 +29,13 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import measure  # noqa: E402
+from tables import sh, spread, timed, write_section  # noqa: E402
 
 BEGIN, END = "<!-- peer-bench:begin -->", "<!-- peer-bench:end -->"
 
@@ -62,10 +62,6 @@ QUICK = {
                                                        "gudhi": [0.3]}),
     "circle-r8": ("experiments/problems/circle-r8.toml", [3], {"gudhi": [0.1]}),
 }
-
-
-def sh(cmd):
-    return subprocess.run(cmd, shell=True, capture_output=True, text=True).stdout.strip()
 
 
 class Runner:
@@ -96,12 +92,7 @@ class Runner:
 
     @staticmethod
     def timed(cmd):
-        start = time.perf_counter()
-        proc = subprocess.run(cmd, capture_output=True, text=True)
-        seconds = time.perf_counter() - start
-        if proc.returncode != 0:
-            raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}): {proc.stderr[-2000:]}")
-        return seconds
+        return timed(cmd)[0]
 
     def explore(self, tool, problem, file, setting):
         cmd, mesh = self.command(tool, problem, file, setting)
@@ -150,9 +141,7 @@ def match(nd_runs, peer_runs, limit=4.0):
 
 
 def fmt_time(times):
-    med = statistics.median(times)
-    spread = f"{min(times):.3g}–{max(times):.3g}" if len(times) > 1 else "–"
-    return med, spread
+    return statistics.median(times), spread(times)
 
 
 def main(argv):
@@ -256,14 +245,7 @@ def main(argv):
     lines += ["", END]
     section = "\n".join(lines)
 
-    text = open(args.out).read() if os.path.exists(args.out) else ""
-    if BEGIN in text and END in text:
-        text = text[:text.index(BEGIN)] + section + text[text.index(END) + len(END):]
-    else:
-        text = text.rstrip("\n") + ("\n\n" if text else "") + "## Peer benchmark\n\n" + \
-            section + "\n"
-    with open(args.out, "w") as f:
-        f.write(text)
+    write_section(args.out, BEGIN, END, "Peer benchmark", section)
     if not args.workdir:
         shutil.rmtree(workdir, ignore_errors=True)
     print(f"bench/run.sh: {len(rows)} matched rows, {len(explored)} runs -> {args.out}",

@@ -27,10 +27,13 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
+sys.path.insert(0, HERE)
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+from tables import sh, spread, timed as run, write_section  # noqa: E402
+
 BEGIN, END = "<!-- self-bench:begin -->", "<!-- self-bench:end -->"
 
 # Issue 14's starting point, microseconds per solution cell at depth 5 (measured before the
@@ -39,24 +42,6 @@ BEFORE = {("rotated-sphere", 3): 11, ("rotated-sphere", 4): 33, ("rotated-sphere
           ("rotated-sphere", 6): 163, ("rotated-sphere", 7): 405, ("rotated-circle", 3): 23,
           ("rotated-circle", 8): 1562}
 STAGES = ("subdivision", "projection", "connection", "analysis")
-
-
-def sh(cmd):
-    return subprocess.run(cmd, shell=True, capture_output=True, text=True).stdout.strip()
-
-
-def run(cmd):
-    """Runs a command, returns (wall seconds, stdout); raises with its stderr on failure."""
-    start = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, text=True)
-    seconds = time.perf_counter() - start
-    if proc.returncode != 0:
-        raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}): {proc.stderr[-2000:]}")
-    return seconds, proc.stdout
-
-
-def spread(times):
-    return f"{min(times):.3g}–{max(times):.3g}" if len(times) > 1 else "–"
 
 
 def per_cell(ndc, workdir, quick):
@@ -192,14 +177,7 @@ def main(argv):
               "writing s | writing / wall | mesh.ply |", "|---|---|---|---|---|---|---|---|"]
     lines += write_lines + ["", END]
     section = "\n".join(lines)
-    text = open(args.out).read() if os.path.exists(args.out) else ""
-    if BEGIN in text and END in text:
-        text = text[:text.index(BEGIN)] + section + text[text.index(END) + len(END):]
-    else:
-        text = text.rstrip("\n") + ("\n\n" if text else "") + "## ndcontour's own tables\n\n" + \
-            section + "\n"
-    with open(args.out, "w") as f:
-        f.write(text)
+    write_section(args.out, BEGIN, END, "ndcontour's own tables", section)
     print(f"bench/self.py: tables -> {args.out}", file=sys.stderr)
     return 0
 
