@@ -43,27 +43,10 @@ class WorkerPrecision {
   unsigned saved_;
 };
 
-/// Calls `body(i)` for every i in [0, count) on the current task arena (the run's, sized by
-/// `--threads`), in any order and on any thread: `body` must only read shared state and write
-/// what belongs to item i. Worker threads see the caller's MPFR precision. Exceptions reach the
-/// caller (oneTBB cancels the rest of the loop). `grain`: the fewest items of one task.
-template <class Body>
-void parallelFor(std::size_t count, Body&& body, std::size_t grain = 1) {
-  if (count == 0) return;
-  if (count == 1) {
-    body(std::size_t{0});
-    return;
-  }
-  const unsigned bits = mpfrPrecision();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, grain),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      const WorkerPrecision precision(bits);
-                      for (std::size_t i = range.begin(); i != range.end(); ++i) body(i);
-                    });
-}
-
 /// parallelFor over blocks: `body(begin, end)` for disjoint ranges covering [0, count), so a
-/// task can keep its scratch for a whole block (same rules as parallelFor).
+/// task can keep its scratch for a whole block. `body` must only read shared state and write
+/// what belongs to its items; worker threads see the caller's MPFR precision; exceptions reach
+/// the caller (oneTBB cancels the rest of the loop). `grain`: the fewest items of one task.
 template <class Body>
 void parallelForBlocks(std::size_t count, Body&& body, std::size_t grain = 1) {
   if (count == 0) return;
@@ -73,6 +56,19 @@ void parallelForBlocks(std::size_t count, Body&& body, std::size_t grain = 1) {
                       const WorkerPrecision precision(bits);
                       body(range.begin(), range.end());
                     });
+}
+
+/// Calls `body(i)` for every i in [0, count) on the current task arena (the run's, sized by
+/// `--threads`), in any order and on any thread (the rules of parallelForBlocks).
+template <class Body>
+void parallelFor(std::size_t count, Body&& body, std::size_t grain = 1) {
+  if (count == 1) return body(std::size_t{0});
+  parallelForBlocks(
+      count,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i != end; ++i) body(i);
+      },
+      grain);
 }
 
 /// Runs `f()` on a task arena of `threads` worker threads (0: every hardware thread), so that
