@@ -7,7 +7,9 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <sstream>
 #include <type_traits>
@@ -18,6 +20,7 @@
 #include "framework/core/cell_forms.hpp"
 #include "framework/core/interval.hpp"
 #include "framework/core/iteration.hpp"
+#include "framework/core/midrad.hpp"
 #include "framework/core/parallel.hpp"
 #include "strategies/connection/cell_tree.hpp"
 #include "strategies/connection/certificate.hpp"
@@ -39,6 +42,97 @@ enum class Krawczyk { kUnique, kNone, kUnknown };
 struct FaceEnds {
   std::vector<bool> lower, upper;
 };
+
+/// The midpoint-radius evaluators of `system`'s equations for the calling thread, built on first
+/// use and kept while the same programs (at the same MPFR precision) come back: faces are
+/// solved on the pool's threads, and an evaluator's scratch must not be shared.
+template <class S>
+std::vector<MidRadEvaluator<S>>& threadEvaluators(const System<S>& system) {
+  thread_local std::vector<std::shared_ptr<const Tape>> tapes;
+  thread_local unsigned bits = 0;
+  thread_local std::vector<MidRadEvaluator<S>> evaluators;
+  const auto& equations = system.equations();
+  bool same = tapes.size() == equations.size() && bits == ScalarTraits<S>::precisionBits();
+  for (std::size_t i = 0; same && i < equations.size(); ++i)
+    same = tapes[i].get() == equations[i].sharedTape().get();
+  if (!same) {
+    tapes.clear();
+    evaluators.clear();
+    for (const Expression& e : equations) {
+      tapes.push_back(e.sharedTape());
+      evaluators.emplace_back(e.sharedTape());
+    }
+    bits = ScalarTraits<S>::precisionBits();
+  }
+  return evaluators;
+}
+
+/// An interval holding [mid - rad, mid + rad] although both ends are rounded to nearest: widened
+/// by two units of the arithmetic relative to each end and by the smallest normal double.
+template <class S>
+Interval<S> enclosingInterval(const S& mid, const S& rad) {
+  using std::abs;
+  const S eps = 2 * ScalarTraits<S>::epsilon();
+  const S tiny = S(std::numeric_limits<double>::min());
+  const S lo = mid - rad, hi = mid + rad;
+  return Interval<S>(lo - (abs(lo) * eps + tiny), hi + (abs(hi) * eps + tiny));
+}
+
+/// Midpoint-radius enclosures of the system F over the box centre +- radius (radius 0 on the
+/// axes it fixes), with the thread's `evaluators`: J(X) restricted to the variables `columns`
+/// into `jacobian` (m x columns.size(), row-major) and F(centre) - level into `fy`. `excluded`
+/// tells whether some F_i - level_i provably has no zero on the box: its value over the box, or
+/// its mean-value form F_i(centre) + sum_j J_ij(X) (X_j - centre_j), excludes 0 (the columns
+/// must then hold every axis the box is wide in). With `stopWhenExcluded` it returns at the first
+/// such equation with `jacobian` and `fy` incomplete. False when a run fails (a value that is not
+/// finite): then nothing is proven.
+template <class S>
+bool encloseSystem(std::vector<MidRadEvaluator<S>>& evaluators, std::span<const S> centre,
+                   std::span<const S> radius, std::span<const S> level,
+                   std::span<const int> columns, std::vector<Interval<S>>& jacobian,
+                   std::vector<Interval<S>>& fy, bool& excluded, bool stopWhenExcluded) {
+  using I = Interval<S>;
+  using std::abs;
+  const std::size_t m = evaluators.size(), width = columns.size();
+  const S up = S(1) + S(8 * (centre.size() + m + 8)) * ScalarTraits<S>::epsilon();
+  thread_local std::vector<S> zero;
+  zero.assign(centre.size(), S(0));
+  jacobian.resize(m * width);
+  fy.resize(m);
+  excluded = false;
+  for (std::size_t i = 0; i < m; ++i) {
+    MidRadEvaluator<S>& e = evaluators[i];
+    const I c(level[i]);
+    // Over the box with the gradient: the value and J(X).
+    if (!e.run(centre, radius, true)) return false;
+    const bool natural = !(enclosingInterval(e.mid(0), e.rad(0)) - c).containsZero();
+    S spread = 0;  // sum_j mag J_ij(X) radius_j
+    for (std::size_t j = 0; j < width; ++j) {
+      const int q = columns[j] + 1;
+      jacobian[i * width + j] = enclosingInterval(e.mid(q), e.rad(q));
+      spread += (abs(e.mid(q)) + e.rad(q)) * radius[columns[j]];
+    }
+    if (!e.run(centre, std::span<const S>(zero), false)) return false;
+    fy[i] = enclosingInterval(e.mid(0), e.rad(0)) - c;
+    const I meanValue = fy[i] + I(-spread * up, spread * up);
+    excluded = excluded || natural || !meanValue.containsZero();
+    if (excluded && stopWhenExcluded) return true;
+  }
+  return true;
+}
+
+/// Centre and radii (rounded up, so that centre +- radius holds the box) of `box`.
+template <class S>
+void centreAndRadius(const Box<S>& box, std::vector<S>& centre, std::vector<S>& radius) {
+  const int n = box.dim();
+  const S up = S(1) + S(8) * ScalarTraits<S>::epsilon();
+  centre.resize(n);
+  radius.resize(n);
+  for (int j = 0; j < n; ++j) {
+    centre[j] = (box.lo[j] + box.hi[j]) / 2;
+    radius[j] = std::max<S>(box.hi[j] - centre[j], centre[j] - box.lo[j]) * up;
+  }
+}
 
 /// Finds the crossings of the level set F = c with one m-face: the roots of the m constraints
 /// minus the level c (docs/crossing.md, "General position"), restricted to the face, a square
@@ -82,6 +176,27 @@ class FaceSolver {
     }
     recurse(patches, ends, 0, roots);
     return certain_;
+  }
+
+  /// Solves on the face as solve() does, from the equations' programs alone (docs/crossing.md,
+  /// "Faces by evaluation"): a box is excluded when the interval value of some F_i - c_i (the
+  /// natural extension intersected with the mean-value form) excludes 0, and a root is kept
+  /// when Newton finds it and the Krawczyk test with the interval Jacobian proves it unique.
+  /// Its cost is polynomial in m, where a face slice of a Bernstein form has (d + 1)^m
+  /// coefficients; every decision is a proof. Returns false, leaving `roots` unspecified, when
+  /// some box is not decided within kEvaluationDepth halvings of the face or kEvaluationBoxes
+  /// boxes, or when the Krawczyk test proves a root that Newton does not find inside: then
+  /// solve() with the Bernstein slices decides the face (with its handling of tangencies and
+  /// rounding). `face` is the box of the free coordinates; m >= 2.
+  bool solveByEvaluation(std::vector<S> point, std::vector<int> freeAxes, const Box<S>& face,
+                         FaceEnds ends, std::vector<std::vector<S>>& roots) {
+    point_ = std::move(point);
+    free_ = std::move(freeAxes);
+    certain_ = true;
+    proven_ = true;
+    withinRounding_ = false;
+    boxes_ = 0;
+    return evaluationRecurse(face, ends, 0, roots);
   }
 
   /// Whether every decision of the last solve is a proof: exclusions by coefficient signs
@@ -150,6 +265,66 @@ class FaceSolver {
     recurse(lower, lowerEnds, depth + 1, roots);
     recurse(upper, upperEnds, depth + 1, roots);
     //! [crossing-face]
+  }
+
+  /// One box of solveByEvaluation: false when it is left undecided.
+  bool evaluationRecurse(const Box<S>& box, const FaceEnds& ends, int depth,
+                         std::vector<std::vector<S>>& roots) {
+    // Exclusion, J(X) and F(mid X) from midpoint-radius runs of the programs.
+    bool excluded = false;
+    if (!enclose(box, true, excluded)) return false;  // a value that is not finite
+    if (excluded) return true;
+    const Krawczyk k = krawczyk(box, &fy_);
+    if (k == Krawczyk::kNone) return true;
+    std::vector<S> root;
+    const bool found = newton(box, root) && inside(box, ends, root);
+    if (found && (k == Krawczyk::kUnique || evaluatedAround(root, box) == Krawczyk::kUnique)) {
+      roots.push_back(fullPoint(root));
+      return true;
+    }
+    if (k == Krawczyk::kUnique || depth >= kEvaluationDepth * m_ || ++boxes_ > kEvaluationBoxes)
+      return false;
+    // Halve along the free axes in turn (half-open children), as recurse does.
+    const int axis = depth % m_;
+    const S mid = (box.lo[axis] + box.hi[axis]) / 2;
+    Box<S> lower = box, upper = box;
+    lower.hi[axis] = mid;
+    upper.lo[axis] = mid;
+    FaceEnds lowerEnds = ends, upperEnds = ends;
+    lowerEnds.upper[axis] = false;
+    upperEnds.lower[axis] = false;
+    return evaluationRecurse(lower, lowerEnds, depth + 1, roots) &&
+           evaluationRecurse(upper, upperEnds, depth + 1, roots);
+  }
+
+  /// Encloses, over the face box X, J(X) into jx_ and F(y) - c at its centre y into fy_ (y as
+  /// krawczyk takes it), in midpoint-radius arithmetic (no rounding-mode switch; encloseSystem);
+  /// `excluded`: some F_i - c_i provably has no zero in X. False when a run fails.
+  bool enclose(const Box<S>& box, bool stopWhenExcluded, bool& excluded) {
+    const S up = S(1) + S(8) * ScalarTraits<S>::epsilon();
+    centre_ = point_;
+    radius_.assign(n_, S(0));
+    for (int j = 0; j < m_; ++j) {
+      const S c = (box.lo[j] + box.hi[j]) / 2;
+      centre_[free_[j]] = c;
+      radius_[free_[j]] = std::max<S>(box.hi[j] - c, c - box.lo[j]) * up;
+    }
+    return encloseSystem(threadEvaluators(system_), std::span<const S>(centre_),
+                         std::span<const S>(radius_), std::span<const S>(level_),
+                         std::span<const int>(free_), jx_, fy_, excluded, stopWhenExcluded);
+  }
+
+  /// krawczykAround with the midpoint-radius enclosures of enclose().
+  Krawczyk evaluatedAround(const std::vector<S>& root, const Box<S>& face) {
+    Box<S> box{root, root};
+    for (int j = 0; j < m_; ++j) {
+      const S w = face.hi[j] - face.lo[j];
+      box.lo[j] -= w;
+      box.hi[j] += w;
+    }
+    bool excluded = false;
+    if (!enclose(box, false, excluded)) return Krawczyk::kUnknown;
+    return krawczyk(box, &fy_);
   }
 
   /// m = 1 (hypersurfaces, k = n - 1): the face is a grid edge, and the parity of its roots is
@@ -425,7 +600,7 @@ class FaceSolver {
   /// Krawczyk operator on the box X with y = mid X, Y = J(y)^-1 and J(X) enclosed by jx_:
   /// K = y - Y F(y) + (I - Y J(X)) (X - y). K inside int X proves one root in X;
   /// K disjoint from X proves none.
-  Krawczyk krawczyk(const Box<S>& box) {
+  Krawczyk krawczyk(const Box<S>& box, const std::vector<Interval<S>>* given = nullptr) {
     using I = Interval<S>;
     std::vector<S> y(m_);
     for (int j = 0; j < m_; ++j) y[j] = (box.lo[j] + box.hi[j]) / 2;
@@ -439,14 +614,18 @@ class FaceSolver {
     Eigen::FullPivLU<Matrix<S>> lu(jy);
     if (lu.rank() < m_) return Krawczyk::kUnknown;
     const Matrix<S> inverse = lu.inverse();
-    // F(y) by interval evaluation at the point, so its rounding is enclosed.
-    std::vector<I> xi;
-    xi.reserve(n_);
-    for (int j = 0; j < n_; ++j) xi.emplace_back(x[j]);
+    // F(y) by interval evaluation at the point (unless given), so its rounding is enclosed.
     std::vector<I> fy;
-    for (int i = 0; i < m_; ++i) {
-      fy.push_back(system_.equations()[i].template evaluate<S>(std::span<const I>(xi)) -
-                   I(level_[i]));
+    if (given) {
+      fy = *given;
+    } else {
+      std::vector<I> xi;
+      xi.reserve(n_);
+      for (int j = 0; j < n_; ++j) xi.emplace_back(x[j]);
+      for (int i = 0; i < m_; ++i) {
+        fy.push_back(system_.equations()[i].template evaluate<S>(std::span<const I>(xi)) -
+                     I(level_[i]));
+      }
     }
     krawczykOperator(box, y, inverse, fy);
     bool unique = true;
@@ -490,7 +669,9 @@ class FaceSolver {
   std::vector<int> free_;
   std::vector<S> f_, jacobian_;
   std::vector<Interval<S>> jx_;
-  std::vector<S> kLower_, kUpper_;  ///< the Krawczyk operator's rows
+  std::vector<Interval<S>> fy_;            ///< F(y) - c at the centre of enclose()'s box
+  std::vector<S> centre_, radius_, zero_;  ///< enclose()'s evaluation point and radii
+  std::vector<S> kLower_, kUpper_;         ///< the Krawczyk operator's rows
   std::span<const S> margins_;
   bool certain_ = true;
   bool proven_ = true;
@@ -499,6 +680,10 @@ class FaceSolver {
   /// root needs about 2 maxDepth m boxes, a fold a few times that.
   long boxes_ = 0;
   static constexpr long kMaxBoxes = 4096;
+  /// solveByEvaluation's limits: beyond them the face goes to the Bernstein solve, which
+  /// handles what evaluation alone cannot decide (tangencies, roots within rounding).
+  static constexpr int kEvaluationDepth = 3;
+  static constexpr long kEvaluationBoxes = 64;
 };
 
 /// The m x n Jacobian of the system at x.
@@ -893,39 +1078,64 @@ class AdaptiveCrossing {
     return forms;
   }
 
-  /// Solves face (axes, side) of `leaf`, whose patches and margins are given (restrictLeaf);
-  /// reads only, so faces are solved in parallel (a FaceSolver per call).
+  /// Solves face (axes, side) of `leaf`; reads only, so faces are solved in parallel (a
+  /// FaceSolver per call). For m >= 2 the face is first solved by evaluation of the programs
+  /// (FaceSolver::solveByEvaluation); only a face that decides nothing so is solved on the
+  /// Bernstein slices of the leaf's patches, which `patches()` returns (restrictLeaf, on first
+  /// use) with the margins `margins`.
+  template <class Patches>
   FaceResult<S> solveFace(std::int32_t leaf, const std::array<int, 2>& axes, int side,
-                          const std::vector<Bernstein<S>>& patches,
-                          std::span<const S> margins) const {
+                          Patches&& patches, std::span<const S> margins) const {
     const Box<S> box = leafBox(leaf);
     const auto ci = tree_.index(leaf);
     const std::int64_t top = tree_.grid(tree_.level(leaf)).cellsPerAxis();
     FaceEnds ends;
     std::vector<int> freeAxes;
     std::vector<S> point(box.lo);
+    Box<S> faceBox;
     for (int j = 0; j < n_; ++j) {
       if (j == axes[0] || j == axes[1]) continue;
       freeAxes.push_back(j);
+      faceBox.lo.push_back(box.lo[j]);
+      faceBox.hi.push_back(box.hi[j]);
       ends.lower.push_back(ci[j] == 0);
       ends.upper.push_back(ci[j] + 1 == top);
     }
-    // Slice the highest fixed axis first so the lower axis numbers stay valid.
-    std::vector<Bernstein<S>> face(m_);
-    for (int i = 0; i < m_; ++i) {
-      face[i] = patches[i];
-      for (int t = k_ - 1; t >= 0; --t) {
-        const bool upper = (side >> t) & 1;
-        face[i] = face[i].faceSlice(axes[t], upper);
-        point[axes[t]] = upper ? box.hi[axes[t]] : box.lo[axes[t]];
-      }
+    for (int t = 0; t < k_; ++t) {
+      const bool upper = (side >> t) & 1;
+      point[axes[t]] = upper ? box.hi[axes[t]] : box.lo[axes[t]];
     }
     std::vector<std::vector<S>> roots;
     FaceSolver<S> solver(in_.system, maxFaceDepth_, level_, position_.slack);
     FaceResult<S> r;
-    r.certain = solver.solve(point, freeAxes, face, ends, roots, margins);
-    r.proven = solver.proven();
-    r.withinRounding = solver.withinRounding();
+    if (m_ > 1 && solver.solveByEvaluation(point, freeAxes, faceBox, ends, roots)) {
+      r.certain = r.proven = true;
+    } else {
+      roots.clear();
+      std::vector<Bernstein<S>> face = faceSlices(patches(), axes, side);
+      r.certain = solver.solve(point, freeAxes, face, ends, roots, margins);
+      r.proven = solver.proven();
+      r.withinRounding = solver.withinRounding();
+    }
+    return faceOutcome(std::move(r), roots, box, freeAxes, ends);
+  }
+
+  /// The face slices (axes, side) of a leaf's patches.
+  std::vector<Bernstein<S>> faceSlices(const std::vector<Bernstein<S>>& patches,
+                                       const std::array<int, 2>& axes, int side) const {
+    // Slice the highest fixed axis first so the lower axis numbers stay valid.
+    std::vector<Bernstein<S>> face(m_);
+    for (int i = 0; i < m_; ++i) {
+      face[i] = patches[i];
+      for (int t = k_ - 1; t >= 0; --t) face[i] = face[i].faceSlice(axes[t], (side >> t) & 1);
+    }
+    return face;
+  }
+
+  /// The rest of solveFace: the roots' degree and degeneracy.
+  FaceResult<S> faceOutcome(FaceResult<S> r, const std::vector<std::vector<S>>& roots,
+                            const Box<S>& box, const std::vector<int>& freeAxes,
+                            const FaceEnds& ends) const {
     if (m_ > 1) r.degenerate = position_.nearBoundary(roots, box, freeAxes, ends);
     r.roots = static_cast<int>(roots.size());
     if (!roots.empty()) {
@@ -956,11 +1166,8 @@ class AdaptiveCrossing {
       // The next window of leaves (the touch leaves added so far among them).
       if (c >= prefetchEnd_) prefetchFaces(c);
       grow();
-      bool restricted = false, ready = false;  // bandEmpty_[c] is set; patches_ are c's
-      if (empty_[c] < 0) {
-        empty_[c] = restrictOnce(c, ready) ? 1 : 0;
-        restricted = true;
-      }
+      bool ready = false;  // patches_ are c's (then bandEmpty_[c] is set too)
+      if (empty_[c] < 0) empty_[c] = restrictOnce(c, ready) ? 1 : 0;
       if (empty_[c] == 1) continue;  // no level set between M and M_c meets it
       const int level = tree_.level(c);
       // A copy: touch leaves added below may move the tree's index storage.
@@ -971,13 +1178,8 @@ class AdaptiveCrossing {
         faceAround(ci, f, corner, around);
         const std::uint64_t key = faceKey(c, f.a, f.side);
         auto it = faces_.find(key);
-        if (it == faces_.end()) {
-          if (!restricted) {
-            restrictOnce(c, ready);
-            restricted = true;
-          }
+        if (it == faces_.end())
           it = faces_.emplace(key, faceResult(c, f.a, f.side, key, ready)).first;
-        }
         degenerate += addFace(it->second, around, level, corner, fixedAxes_[f.a]);
       }
     }
@@ -1077,9 +1279,13 @@ class AdaptiveCrossing {
         if (at == key) return std::move(result);
       }
     }
-    if (!ready) restrictTo(c);
-    ready = true;
-    return solveFace(c, fixedAxes_[a], side, patches_, margins_);
+    const RootForms& rf = rootForms(tree_.index(c), tree_.level(c));
+    const auto patches = [&]() -> const std::vector<Bernstein<S>>& {
+      if (!ready) restrictTo(c);
+      ready = true;
+      return patches_;
+    };
+    return solveFace(c, fixedAxes_[a], side, patches, rf.margins);
   }
 
   /// What prefetchLeaf found for one leaf ahead of crossFaces.
@@ -1130,8 +1336,11 @@ class AdaptiveCrossing {
     for (const OwnedFace& f : out.owned) {
       const std::uint64_t key = faceKey(c, f.a, f.side);
       if (faces_.count(key)) continue;
-      prepare();
-      out.faces.emplace_back(key, solveFace(c, fixedAxes_[f.a], f.side, patches, rf.margins));
+      const auto restricted = [&]() -> const std::vector<Bernstein<S>>& {
+        prepare();
+        return patches;
+      };
+      out.faces.emplace_back(key, solveFace(c, fixedAxes_[f.a], f.side, restricted, rf.margins));
     }
   }
 
@@ -1293,10 +1502,35 @@ class AdaptiveCrossing {
   /// coordinates (J enclosed by the widened derivative hulls of the leaf's patches).
   bool cellGraph(std::int32_t leaf, const RootForms& rf, LeafTests& t) {
     if (graph_[leaf] < 0) {
-      prepare(leaf, rf, t);
-      graph_[leaf] = graphOf(t.patches, rf.margins, t.jacobian, t.test);
+      // By evaluation first (polynomial in n); the Bernstein hulls where it does not prove it.
+      bool excluded = false;
+      graph_[leaf] = evaluatedGraph(leafBox(leaf), -1, excluded, t);
+      if (!graph_[leaf]) {
+        prepare(leaf, rf, t);
+        graph_[leaf] = graphOf(t.patches, rf.margins, t.jacobian, t.test);
+      }
     }
     return graph_[leaf] == 1;
+  }
+
+  /// The graph test with J(X) from midpoint-radius runs of the programs over `box` (whole, or
+  /// its face fixing axis `fixed` when fixed >= 0; that face's box is given): true when some m
+  /// columns of the free axes form a regular block. `excluded`: F - c provably has no zero on
+  /// the box (for a face, that alone passes the face graph test).
+  bool evaluatedGraph(const Box<S>& box, int fixed, bool& excluded, LeafTests& t) const {
+    thread_local std::vector<S> centre, radius;
+    thread_local std::vector<Interval<S>> fy;
+    thread_local std::vector<int> all;
+    centreAndRadius(box, centre, radius);
+    all.resize(n_);
+    std::iota(all.begin(), all.end(), 0);
+    excluded = false;
+    if (!encloseSystem(threadEvaluators(in_.system), std::span<const S>(centre),
+                       std::span<const S>(radius), std::span<const S>(level_),
+                       std::span<const int>(all), t.jacobian, fy, excluded, false))
+      return false;
+    if (fixed < 0) return t.test.graph(t.jacobian, all);
+    return excluded || t.test.graph(t.jacobian, freeAxes(fixed));
   }
 
   /// The graph test of the box of patches_.
@@ -1336,9 +1570,21 @@ class AdaptiveCrossing {
   /// graph over one coordinate, so no closed curve of M_c lies inside a face.
   bool facesGraph(std::int32_t leaf, const RootForms& rf, LeafTests& t) {
     if (faceGraph_[leaf] < 0) {
-      prepare(leaf, rf, t);
-      const int failed =
-          firstFailing(failingFacesOf(t.patches, rf.margins, false, t.jacobian, t.test));
+      // Face by face in failingFacesOf's order, by evaluation first and on the Bernstein
+      // slices where that does not prove it.
+      const Box<S> box = leafBox(leaf);
+      int failed = -1;
+      for (int a = 0; a < n_ && failed < 0; ++a) {
+        for (int side = 0; side < 2 && failed < 0; ++side) {
+          Box<S> face = box;
+          face.lo[a] = face.hi[a] = side == 1 ? box.hi[a] : box.lo[a];
+          bool excluded = false;
+          if (evaluatedGraph(face, a, excluded, t)) continue;
+          prepare(leaf, rf, t);
+          if (!faceGraphOf(t.patches, rf.margins, a, side == 1, freeAxes(a), t.jacobian, t.test))
+            failed = 2 * a + side;
+        }
+      }
       faceGraph_[leaf] = failed < 0;
       if (failed >= 0) faceTrouble(leaf, failed / 2, failed % 2 == 1);
     }
