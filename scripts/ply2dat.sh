@@ -9,6 +9,11 @@
 #       is a closed polyline a b c a and each segment a b, followed by two blank lines (separate
 #       blocks, so that splot ... with lines draws no lines between them). --pm3d writes each
 #       triangle as a 2 x 2 grid (a b / c c) for `with pm3d` (shaded). --part P keeps only faces whose last face property (`part` of input.ply) is P.
+#   scripts/ply2dat.sh --eye EX,EY,EZ --target TX,TY,TZ [...] FILE.ply
+#       the same, every point projected in perspective from the eye point E looking at T (world
+#       z up): x y = the perspective image (right, up over the depth), z = minus the depth along
+#       the view direction, so that `set view 0,0` shows the perspective picture and pm3d
+#       depthorder sorts by distance (gnuplot itself only draws orthographic views).
 #   scripts/ply2dat.sh --ruling [--every N] FILE.ply
 #       one segment per N-th vertex from (x, y, z) to (x2, y2, z2): the rulings of a
 #       convex-hull result (the bitangent segments); N = 0 (the default) picks N so that about
@@ -21,6 +26,8 @@ props="x,y,z"
 mode="simplices"
 every=0
 part=""
+eye=""
+target=""
 while [[ $# -gt 1 ]]; do
   case "$1" in
     --props) props="$2"; shift 2 ;;
@@ -28,11 +35,13 @@ while [[ $# -gt 1 ]]; do
     --ruling) mode="ruling"; shift ;;
     --every) every="$2"; shift 2 ;;
     --part) part="$2"; shift 2 ;;
+    --eye) eye="$2"; shift 2 ;;
+    --target) target="$2"; shift 2 ;;
     *) echo "ply2dat.sh: unknown option '$1'" >&2; exit 2 ;;
   esac
 done
 if [[ $# -ne 1 || ! -r "$1" ]]; then
-  echo "usage: ply2dat.sh [--props X,Y,Z] [--pm3d] [--part P] [--ruling [--every N]] FILE.ply" >&2
+  echo "usage: ply2dat.sh [--props X,Y,Z] [--pm3d] [--part P] [--eye X,Y,Z --target X,Y,Z] [--ruling [--every N]] FILE.ply" >&2
   exit 2
 fi
 if [[ "$mode" == "ruling" ]]; then props="x,y,z,x2,y2,z2"; fi
@@ -58,9 +67,20 @@ if is_binary "$file"; then
   python3 "$(dirname "${BASH_SOURCE[0]}")/ply2ascii.py" "$file" >"$ascii_file" || exit 2
 fi
 
-awk -v file="$file" -v props="$props" -v mode="$mode" -v every="$every" -v part="$part" '
+awk -v file="$file" -v props="$props" -v mode="$mode" -v every="$every" -v part="$part" \
+  -v eye="$eye" -v target="$target" '
   function fail(msg) { print "ply2dat.sh: " file ": " msg > "/dev/stderr"; bad = 1; exit 2 }
-  BEGIN { header = 1; nwant = split(props, want, ","); nelem = 0 }
+  BEGIN { header = 1; nwant = split(props, want, ","); nelem = 0; if (eye != "") camera() }
+  # The perspective frame: forward F = (T - E) / |T - E|, right R = F x z, up U = R x F.
+  function camera(   e, t, n) {
+    if (split(eye, e, ",") != 3 || split(target, t, ",") != 3) fail("--eye and --target need X,Y,Z")
+    for (i = 1; i <= 3; ++i) { E[i] = e[i]; F[i] = t[i] - e[i] }
+    unit(F); R[1] = F[2]; R[2] = -F[1]; R[3] = 0
+    if (R[1] == 0 && R[2] == 0) R[1] = 1
+    unit(R); U[1] = R[2] * F[3] - R[3] * F[2]; U[2] = R[3] * F[1] - R[1] * F[3]
+    U[3] = R[1] * F[2] - R[2] * F[1]
+  }
+  function unit(a,   n) { n = sqrt(a[1]^2 + a[2]^2 + a[3]^2); for (i = 1; i <= 3; ++i) a[i] /= n }
   # Header: the elements in order, their counts and the vertex properties.
   header && NR == 1 && $1 != "ply" { fail("not a PLY file") }
   header && $1 == "format" && $2 != "ascii" { fail("format " $2 " is not read") }
@@ -101,6 +121,12 @@ awk -v file="$file" -v props="$props" -v mode="$mode" -v every="$every" -v part=
       pt($1); pt($2); print ""; print ""
     }
   }
-  function pt(k) { print coord[k, 1], coord[k, 2], coord[k, 3] }
+  function pt(k,   d, j, x, y, z) {
+    if (eye == "") { print coord[k, 1], coord[k, 2], coord[k, 3]; return }
+    x = y = z = 0
+    for (j = 1; j <= 3; ++j) { d = coord[k, j] - E[j]; x += d * R[j]; y += d * U[j]; z += d * F[j] }
+    if (z < 1e-9) z = 1e-9
+    print x / z, y / z, -z
+  }
   END { if (!bad && header) fail("no end_header") }
 ' "$ascii_file"

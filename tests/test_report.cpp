@@ -251,6 +251,7 @@ TEST_CASE("Tables: Markdown and LaTeX text, with escaping", "[report]") {
         "  \\centering\n"
         "  \\caption{Shares in \\% of a\\_b}\n"
         "  \\label{tab-x}\n"
+        "  \\small\\setlength{\\tabcolsep}{4pt}\n"
         "  \\resizebox{\\ifdim\\width>\\linewidth\\linewidth\\else\\width\\fi}{!}{%\n"
         "  \\begin{tabular}{lr}\n"
         "    \\toprule\n"
@@ -289,11 +290,17 @@ TEST_CASE("An ablation table from a hand-written CSV matches exactly", "[report]
         "  \\caption{Ablation of the bounding strategy: cells visited and kept, largest "
         "residual, seconds per stage (mean over seeds).}\n"
         "  \\label{tab-ablation-bounding}\n"
+        "  \\small\\setlength{\\tabcolsep}{4pt}\n"
         "  \\resizebox{\\ifdim\\width>\\linewidth\\linewidth\\else\\width\\fi}{!}{%\n"
         "  \\begin{tabular}{lrrlrrrrrrr}\n"
         "    \\toprule\n"
-        "    problem & n & k & bounding & visited & solution & max residual & subdivision s & "
-        "projection s & connection s & total s \\\\\n"
+        // More than eight columns: titles of two words on two lines.
+        "    problem & n & k & bounding & visited & solution & "
+        "\\begin{tabular}[b]{@{}c@{}}max\\\\residual\\end{tabular} & "
+        "\\begin{tabular}[b]{@{}c@{}}subdivision\\\\s\\end{tabular} & "
+        "\\begin{tabular}[b]{@{}c@{}}projection\\\\s\\end{tabular} & "
+        "\\begin{tabular}[b]{@{}c@{}}connection\\\\s\\end{tabular} & "
+        "\\begin{tabular}[b]{@{}c@{}}total\\\\s\\end{tabular} \\\\\n"
         "    \\midrule\n"
         "    circle & 2 & 1 & bernstein & 120 & 40 & 2.5e-16 & 0.010 & 0.0020 & 5.0e-4 & 0.013 "
         "\\\\\n"
@@ -475,4 +482,168 @@ TEST_CASE("Figures: a gnuplot script with inline data, rendered when gnuplot exi
   CHECK(fs::file_size(results / "fig-degeneracy-vs-n" / "fig-degeneracy-vs-n.png") > 1000);
   CHECK(fs::file_size(results / "fig-degeneracy-vs-n" / "fig-degeneracy-vs-n.pdf") > 1000);
   CHECK_FALSE(fs::exists(results / "fig-degeneracy-vs-n" / "fig-degeneracy-vs-n.tmp.png"));
+}
+
+TEST_CASE("Table 1's main columns are the paper's settings; the others are extra columns",
+          "[report]") {
+  // One problem under four settings: only bernstein + paper may fill the main columns.
+  std::vector<std::map<std::string, std::string>> rows;
+  const std::map<std::string, std::pair<int, int>> counts = {{"bernstein paper", {300, 100}},
+                                                             {"bernstein crossing", {300, 100}},
+                                                             {"linearized paper", {300, 60}},
+                                                             {"linearized crossing", {300, 60}}};
+  for (const auto& [setting, nc] : counts) {
+    const std::string bounding = setting.substr(0, setting.find(' '));
+    const std::string connection = setting.substr(setting.find(' ') + 1);
+    rows.push_back({{"run", "fig8a-" + bounding + "-" + connection},
+                    {"problem", "bisector-fig8a"},
+                    {"n", "4"},
+                    {"k", "2"},
+                    {"bounding", bounding},
+                    {"connection", connection},
+                    {"cells.normal", std::to_string(nc.first)},
+                    {"cells.abnormal", std::to_string(nc.second)},
+                    {"cells.failed", "0"}});
+  }
+  const CsvTable csv = parseCsv(experimentCsv("tab1-degeneracy", rows), "t1.csv");
+  const Artefact a = buildArtefact("tab1-degeneracy", csv, scratch());
+  REQUIRE(a.tables.size() == 1);
+  const Table& t = a.tables[0];
+  CHECK(t.columns == std::vector<std::string>{"example", "problem", "n", "depth", "normal",
+                                              "abnormal", "abnormal %", "abnormal % linearized",
+                                              "abnormal % crossing", "paper normal",
+                                              "paper abnormal", "paper abnormal %"});
+  CHECK_THAT(t.caption, Catch::Contains("ours with bounding bernstein, connection paper"));
+  // 100 / 400 = 25.0% with bernstein; 60 / 360 = 16.7% with linearized.
+  CHECK(t.rows[0] == std::vector<std::string>{"Bisector, Fig. 8(a)", "bisector-fig8a", "4", "5",
+                                              "300", "100", "25.0", "16.7", "25.0", "444", "306",
+                                              "40.8"});
+  CHECK(t.rows[1][1] == "(no result)");
+  CHECK(t.rows[1].size() == t.columns.size());
+  // The bar chart: ours, the two extra settings and the paper's share per example.
+  CHECK_THAT(a.gnuplot, Catch::Contains("$bars << EOD\n0 25 16.6666667 25 40.8\n"));
+  CHECK_THAT(a.gnuplot, Catch::Contains("with boxes"));
+  REQUIRE_FALSE(a.conclusion.empty());
+  CHECK_THAT(a.conclusion[0],
+             Catch::StartsWith("In Table 1: our abnormal share ranges from 25.0%"));
+}
+
+TEST_CASE("Curve data for splot: polylines chained, two blank lines between them", "[report]") {
+  // Two polylines: an open chain 0-1-2 (given out of order) and a closed triangle 3-4-5.
+  const std::vector<std::vector<int>> segments = {{1, 2}, {3, 4}, {0, 1}, {4, 5}, {5, 3}};
+  const std::vector<std::vector<int>> lines = chainSegments(segments);
+  REQUIRE(lines.size() == 2);
+  CHECK((lines[0] == std::vector<int>{0, 1, 2} || lines[0] == std::vector<int>{2, 1, 0}));
+  CHECK(lines[1].size() == 4);
+  CHECK(lines[1].front() == lines[1].back());
+  std::vector<std::array<double, 3>> points;
+  for (int v = 0; v < 6; ++v) points.push_back({double(v), 0, 0});
+  GnuplotScript gp("fig-x");
+  gp.data("curve", polylineRows(lines, points));
+  const std::string text = gp.text();
+  const std::string block = text.substr(text.find("$curve << EOD\n"));
+  // Each polyline is its own data set: never one blank line between two polylines.
+  CHECK_THAT(block, Catch::Contains("2 0 0\n\n\n"));
+  CHECK(block.find("\n\n\n\n") == std::string::npos);
+  const std::size_t body = block.find('\n') + 1, end = block.find("EOD\n", body);
+  std::string data = block.substr(body, end - body);
+  for (std::size_t at = data.find("\n\n\n"); at != std::string::npos; at = data.find("\n\n\n"))
+    data.replace(at, 3, "\n#\n");
+  CHECK(data.find("\n\n") == std::string::npos);
+}
+
+namespace {
+
+/// An ASCII mesh.ply of `points` and `edges` (a curve result).
+std::string asciiCurvePly(const std::vector<std::array<double, 3>>& points,
+                          const std::vector<std::array<int, 2>>& edges) {
+  std::string out = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(points.size()) +
+                    "\nproperty double x\nproperty double y\nproperty double z\nelement edge " +
+                    std::to_string(edges.size()) +
+                    "\nproperty int vertex1\nproperty int vertex2\nend_header\n";
+  for (const auto& p : points)
+    out += std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) + "\n";
+  for (const auto& e : edges) out += std::to_string(e[0]) + " " + std::to_string(e[1]) + "\n";
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("Application figures: curves as separate polylines, titled by the problem name",
+          "[report]") {
+  const fs::path dir = scratch() / "application" / "results" / "fig-app-curves";
+  // Two separate segments of two points each: with one blank line splot would join them.
+  spit(dir / "runs" / "two-arcs.L5" / "mesh.ply",
+       asciiCurvePly({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}, {{{0, 1}}, {{2, 3}}}));
+  const std::vector<std::map<std::string, std::string>> rows = {{{"run", "two-arcs.L5"},
+                                                                 {"problem", "two-arcs"},
+                                                                 {"n", "3"},
+                                                                 {"k", "1"},
+                                                                 {"mesh.vertices", "4"},
+                                                                 {"mesh.components", "2"},
+                                                                 {"mesh.euler_characteristic", "2"},
+                                                                 {"mesh.boundary_edges", "0"},
+                                                                 {"mesh.nonmanifold_edges", "0"},
+                                                                 {"accuracy.max_residual", "1e-12"},
+                                                                 {"timing_s.total", "0.1"}}};
+  const CsvTable csv = parseCsv(experimentCsv("fig-app-curves", rows), "app.csv");
+  const Artefact a = buildArtefact("fig-app-curves", csv, dir);
+  CHECK_THAT(a.gnuplot, Catch::Contains("$mesh0 << EOD\n0 0 0\n1 0 0\n\n\n0 1 0\n1 1 0\n\n\nEOD"));
+  CHECK_THAT(a.gnuplot, Catch::Contains("set title \"two-arcs (n = 3, depth 5)\""));
+  CHECK(a.gnuplot.find(dir.string()) == std::string::npos);
+  // The per-run scripts title their pictures with the problem name, not the results path.
+  for (const auto& e :
+       fs::directory_iterator(fs::path(NDC_SOURCE_DIR) / "experiments" / "gnuplot")) {
+    std::istringstream script(slurp(e.path()));
+    for (std::string line; std::getline(script, line);)
+      if (line.find("title") != std::string::npos && line.find("set ") != std::string::npos)
+        CHECK_FALSE(line.find(".dir") != std::string::npos);
+  }
+}
+
+TEST_CASE("Convergence: the x axis spans the data's cell sizes", "[report]") {
+  std::vector<std::map<std::string, std::string>> rows;
+  for (int depth : {3, 4, 5, 6})
+    rows.push_back({{"run", "circle-" + std::to_string(depth)},
+                    {"problem", "circle"},
+                    {"depth", std::to_string(depth)},
+                    {"accuracy.max_chord_error", std::to_string(std::ldexp(1.0, -2 * depth))},
+                    {"accuracy.max_residual", "1e-15"},
+                    {"cells.solution", std::to_string(1 << depth)},
+                    {"timing_s.total", "0.01"}});
+  const CsvTable csv = parseCsv(experimentCsv("fig-convergence", rows), "c.csv");
+  const Artefact a = buildArtefact("fig-convergence", csv, scratch());
+  // h from 2^-6 to 2^-3, a quarter beyond: not on to 1.
+  CHECK_THAT(a.gnuplot, Catch::Contains("set xrange [0.01250:0.1562]"));
+  REQUIRE(a.conclusion.size() == 1);
+  CHECK_THAT(a.conclusion[0], Catch::Contains("the chord error falls with order 2.00"));
+  CHECK_THAT(a.conclusion[0], Catch::Contains("the cells of curves grow with order 1.00"));
+}
+
+TEST_CASE("The conclusion fragment is computed from the results", "[report]") {
+  const fs::path results = scratch() / "conclusion" / "results";
+  const std::vector<std::map<std::string, std::string>> rows = {
+      {{"run", "a"},
+       {"problem", "blending-fig10a"},
+       {"n", "6"},
+       {"k", "2"},
+       {"connection", "paper"},
+       {"cells.normal", "120"},
+       {"cells.abnormal", "280"},
+       {"cells.failed", "0"}},
+      {{"run", "b"}, {"problem", "bisector-fig8b"}, {"status", "failed"}, {"exit_code", "1"}}};
+  spit(results / "tab1-degeneracy" / "tab1-degeneracy.csv", experimentCsv("tab1-degeneracy", rows));
+  std::ostringstream log;
+  ReportSettings settings;
+  settings.results = results;
+  settings.configs = scratch() / "conclusion" / "configs";
+  settings.reference = fs::path(NDC_SOURCE_DIR) / "experiments" / "reference";
+  settings.render = false;
+  writeReport(settings, log);
+  const std::string conclusion = slurp(results / "conclusion.tex");
+  CHECK_THAT(conclusion, Catch::Contains("We ran 2 runs in 1 experiment, of which 1 failed"));
+  // 280 / 400 = 70.0% for blending-fig10a, beside the paper's 59.2% (Fig. 10(a)).
+  CHECK_THAT(conclusion, Catch::Contains("70.0\\%"));
+  CHECK_THAT(conclusion, Catch::Contains("blending (n = 6) 70.0\\%"));
+  CHECK_THAT(slurp(results / "report.md"), Catch::Contains("## Conclusion"));
 }

@@ -6,6 +6,7 @@ if (!exists("dir")) {
   print "blending.gp: usage: gnuplot -e \"dir='RESULT_DIR'\" blending.gp"
   exit status 2
 }
+problem = system("sed -n 's/.*\"problem\": *\"\\([^\"]*\\)\".*/\\1/p' '".dir."/summary.json' | head -n 1")
 ply2dat = system("dirname '".ARG0."'")."/../../scripts/ply2dat.sh"
 input = "< ".ply2dat." '".dir."/input.ply'"
 mesh = "< ".ply2dat." --pm3d '".dir."/mesh.ply'"
@@ -21,12 +22,14 @@ set zrange [Z_min - grow : Z_max + grow]
 
 set terminal pngcairo size 1200, 1000 font ",14"
 set output dir."/blending.png"
-set title "blending: ".dir noenhanced
-set view 62, 35, 1.5
+set title "blending: ".problem noenhanced
+set view 62, 35, 1.1
 set view equal xyz
 set xyplane 0
-unset border
-unset tics
+# Axes: a box with tics and labels, as in the paper's figures.
+set border 4095 lw 0.5 lc rgb "#808080"
+set tics font ",10"
+set xlabel "x"; set ylabel "y"; set zlabel "z"
 unset colorbox
 set key top right
 set pm3d depthorder border lw 0.2 lc rgb "#603018"
@@ -35,4 +38,5 @@ set pm3d lighting primary 0.55 specular 0.25
 # as a grid and draws spurious lines between separate parts.
 set surface explicit
 splot input with lines lc rgb "#b0b0b0" lw 0.7 title "S_1, S_2", \
-      mesh with pm3d fillcolor rgb "#e08a3c" title "blend S_1 + {/Symbol a}_1 N_1"
+      mesh with pm3d fillcolor rgb "#e08a3c" notitle, \
+      keyentry with boxes fill solid 1.0 lc rgb "#e08a3c" title "blend S_1 + {/Symbol a}_1 N_1"

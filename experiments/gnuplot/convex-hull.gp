@@ -8,6 +8,7 @@ if (!exists("dir")) {
   print "convex-hull.gp: usage: gnuplot -e \"dir='RESULT_DIR'\" convex-hull.gp"
   exit status 2
 }
+problem = system("sed -n 's/.*\"problem\": *\"\\([^\"]*\\)\".*/\\1/p' '".dir."/summary.json' | head -n 1")
 ply2dat = system("dirname '".ARG0."'")."/../../scripts/ply2dat.sh"
 input = "< ".ply2dat." '".dir."/input.ply'"
 ruling = "< ".ply2dat." --ruling '".dir."/mesh.ply'"
@@ -25,12 +26,14 @@ set zrange [Z_min - grow : Z_max + grow]
 
 set terminal pngcairo size 1200, 1000 font ",14"
 set output dir."/convex-hull.png"
-set title "convex hull (bitangent planes): ".dir noenhanced
-set view 62, 35, 1.5
+set title "convex hull (bitangent planes): ".problem noenhanced
+set view 62, 35, 1.1
 set view equal xyz
 set xyplane 0
-unset border
-unset tics
+# Axes: a box with tics and labels, as in the paper's figures.
+set border 4095 lw 0.5 lc rgb "#808080"
+set tics font ",10"
+set xlabel "x"; set ylabel "y"; set zlabel "z"
 set key top right
 # Each triangle or segment is its own block: without this, splot joins blocks of equal length
 # as a grid and draws spurious lines between separate parts.

@@ -9,6 +9,7 @@ if (!exists("dir")) {
   print "sweep-envelope.gp: usage: gnuplot -e \"dir='RESULT_DIR'\" sweep-envelope.gp"
   exit status 2
 }
+problem = system("sed -n 's/.*\"problem\": *\"\\([^\"]*\\)\".*/\\1/p' '".dir."/summary.json' | head -n 1")
 ply2dat = system("dirname '".ARG0."'")."/../../scripts/ply2dat.sh"
 input = "< ".ply2dat." '".dir."/input.ply'"
 shaded = "< ".ply2dat." --pm3d '".dir."/input.ply'"
@@ -31,20 +32,25 @@ set zrange [z0 - pad : z1 + pad]
 
 set terminal pngcairo size 1800, 800 font ",14"
 set output dir."/sweep-envelope.png"
-set view 58, 28, 1.7
+set view 58, 28, 1.25
 set view equal xyz
 set xyplane 0
 set surface explicit
-unset border
-unset tics
+# Axes: a box with tics and labels, as in the paper's figures.
+set border 4095 lw 0.5 lc rgb "#808080"
+set tics font ",10"
+set xlabel "x"; set ylabel "y"; set zlabel "z"
 unset colorbox
 set key top right
 set pm3d depthorder border lw 0.15 lc rgb "#303030"
 set pm3d lighting primary 0.55 specular 0.25
-set multiplot layout 1, 2 title "sweep-envelope: ".dir noenhanced
+set multiplot layout 1, 2 title "sweep-envelope: ".problem noenhanced
 set title "(a) the moving body A(t)[S]"
-splot shaded with pm3d fillcolor rgb "#d08a3c" title "five instants"
+splot shaded with pm3d fillcolor rgb "#d08a3c" notitle, \
+      keyentry with boxes fill solid 1.0 lc rgb "#d08a3c" title "five instants"
 set title "(b) the envelope, equation (4)"
-splot shaded with pm3d fillcolor rgb "#e0e0e0" title "body", \
-      mesh with pm3d fillcolor rgb "#4a86d0" title "envelope"
+splot shaded with pm3d fillcolor rgb "#e0e0e0" notitle, \
+      keyentry with boxes fill solid 1.0 lc rgb "#e0e0e0" title "body", \
+      mesh with pm3d fillcolor rgb "#4a86d0" notitle, \
+      keyentry with boxes fill solid 1.0 lc rgb "#4a86d0" title "envelope"
 unset multiplot

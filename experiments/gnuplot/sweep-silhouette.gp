@@ -1,10 +1,13 @@
 # sweep-silhouette.gp: the perspective silhouette of a general swept volume (paper Sec. 3.2,
 # Figure 7): the silhouette curves (mesh.ply, x y z = A(t)[S(u, v)] on equations (4) and (5))
-# in bold over the moving body at five instants (input.ply), seen from the direction of the eye
-# point (orthographic: gnuplot has no perspective view). The eye is read from
-# experiments/problems/PROBLEM.toml (PROBLEM from summary.json) or given as eye='x y z';
-# without it the view is a fixed oblique one. envelope='DIR' adds the envelope surface of a
-# sweep-envelope result of the same body and motion, in light grey.
+# in bold on the envelope of the swept volume, with the moving body at five instants
+# (input.ply), in perspective from the eye point. Gnuplot only draws orthographic views, so
+# scripts/ply2dat.sh --eye projects every point through the eye and the plot looks straight down
+# the projected depth axis. The eye is read from experiments/problems/PROBLEM.toml (PROBLEM from
+# summary.json) or given as eye='x y z'; without it the view is a fixed oblique orthographic one.
+# The envelope is mesh.ply of a surface result over the same body and motion (an identical
+# input.ply, e.g. sweep-envelope-fig9 for sweep-silhouette-boomerang) found beside DIR, or given
+# as envelope='DIR'.
 #   gnuplot -e "dir='results/sweep-silhouette-boomerang'" experiments/gnuplot/sweep-silhouette.gp
 # writes results/sweep-silhouette-boomerang/sweep-silhouette.png (scripts/render.sh picks it).
 if (!exists("dir")) {
@@ -13,63 +16,79 @@ if (!exists("dir")) {
 }
 root = system("dirname '".ARG0."'")."/../.."
 ply2dat = root."/scripts/ply2dat.sh"
-body = "< ".ply2dat." --pm3d '".dir."/input.ply'"
-curves = "< ".ply2dat." '".dir."/mesh.ply'"
+problem = system("sed -n 's/.*\"problem\": *\"\\([^\"]*\\)\".*/\\1/p' '".dir."/summary.json' | head -n 1")
 
 # The eye point: given, or the `eye = [x, y, z]` line of the example problem file.
 if (!exists("eye")) {
-  problem = system("sed -n 's/.*\"problem\": *\"\\([^\"]*\\)\".*/\\1/p' '".dir."/summary.json' | head -n 1")
   eye = system("sed -n 's/^eye *= *\\[\\(.*\\)\\].*/\\1/p' '".root."/experiments/problems/".problem.".toml' 2>/dev/null | tr ',' ' '")
 }
-
-# The box: the body's instants and the curves.
-stats body using 1:2 nooutput name "B"
-stats body using 3 nooutput name "BZ"
-stats curves using 1:2 nooutput name "C"
-stats curves using 3 nooutput name "CZ"
-min(a, b) = a < b ? a : b
-max(a, b) = a > b ? a : b
-x0 = min(B_min_x, C_min_x); x1 = max(B_max_x, C_max_x)
-y0 = min(B_min_y, C_min_y); y1 = max(B_max_y, C_max_y)
-z0 = min(BZ_min, CZ_min); z1 = max(BZ_max, CZ_max)
-pad = 0.02 * sqrt((x1 - x0)**2 + (y1 - y0)**2 + (z1 - z0)**2)
-set xrange [x0 - pad : x1 + pad]
-set yrange [y0 - pad : y1 + pad]
-set zrange [z0 - pad : z1 + pad]
-
-# View from the eye: gnuplot's `set view rx, rz` looks from the direction
-# (sin rx sin rz, -sin rx cos rz, cos rx); aim it from the box centre to the eye.
-rx = 62; rz = 35; seen = "an oblique view"
-if (words(eye) == 3) {
-  dx = real(word(eye, 1)) - 0.5 * (x0 + x1)
-  dy = real(word(eye, 2)) - 0.5 * (y0 + y1)
-  dz = real(word(eye, 3)) - 0.5 * (z0 + z1)
-  d = sqrt(dx**2 + dy**2 + dz**2)
-  rx = acos(dz / d) * 180 / pi
-  rz = atan2(dx, -dy) * 180 / pi
-  rz = rz < 0 ? rz + 360 : rz
-  seen = "seen from the eye (".eye.")"
+# The envelope: a sibling result (results/NAME/ or results/fig-app-*/runs/RUN/) with the same
+# input.ply whose mesh.ply has faces.
+if (!exists("envelope")) {
+  envelope = system("for d in '".dir."'/../*/ '".dir."'/../../../fig-app-*/runs/*/; do [ \"$(cd \"$d\" 2>/dev/null && pwd)\" != \"$(cd '".dir."' && pwd)\" ] && cmp -s \"$d/input.ply\" '".dir."/input.ply' && head -c 400 \"$d/mesh.ply\" | grep -a -q '^element face' && { echo \"${d%/}\"; break; }; done")
 }
+
+# The box of the body's instants and the curves (world coordinates): its centre is the target.
+raw = "< ".ply2dat." '".dir."/input.ply'"
+stats raw using 1:2 nooutput name "B"
+stats raw using 3 nooutput name "BZ"
+target = sprintf("%.9g,%.9g,%.9g", 0.5 * (B_min_x + B_max_x), 0.5 * (B_min_y + B_max_y), 0.5 * (BZ_min + BZ_max))
+perspective = words(eye) == 3
+project = perspective ? " --eye ".word(eye, 1).",".word(eye, 2).",".word(eye, 3)." --target ".target : ""
+body = "< ".ply2dat.project." --pm3d '".dir."/input.ply'"
+curves = "< ".ply2dat.project." '".dir."/mesh.ply'"
+shell = "< ".ply2dat.project." --pm3d '".envelope."/mesh.ply'"
 
 set terminal pngcairo size 1200, 1000 font ",14"
 set output dir."/sweep-silhouette.png"
-set title "sweep-silhouette: ".dir.", ".seen noenhanced
-set view rx, rz, 1.6
-set view equal xyz
 set xyplane 0
 set surface explicit
-unset border
-unset tics
 unset colorbox
-set key top right
-set pm3d depthorder border lw 0.1 lc rgb "#909090"
+set key top right samplen 2
+set pm3d depthorder noborder
 set pm3d lighting primary 0.55 specular 0.2
-if (exists("envelope")) {
-  splot "< ".ply2dat." --pm3d '".envelope."/mesh.ply'" with pm3d fillcolor rgb "#d8e4f0" \
-        title "envelope", \
-        body with pm3d fillcolor rgb "#f0d8b0" title "body, five instants", \
-        curves with lines lc rgb "#c02020" lw 3 title "silhouette, (4) and (5)"
+if (perspective) {
+  set title problem.": perspective from the eye (".eye.")" noenhanced
+  # Looking down the projected depth axis shows the perspective picture; the image axes are
+  # not world axes, so the world axes are drawn as a projected frame instead.
+  set view 0, 0, 1.7
+  set view equal xy
+  unset border
+  unset tics
+  # The camera of scripts/ply2dat.sh --eye, to draw the world axes x, y, z from the box's
+  # lowest corner as a projected frame with their end values.
+  ex = real(word(eye, 1)); ey = real(word(eye, 2)); ez = real(word(eye, 3))
+  fx = 0.5 * (B_min_x + B_max_x) - ex; fy = 0.5 * (B_min_y + B_max_y) - ey; fz = 0.5 * (BZ_min + BZ_max) - ez
+  fn = sqrt(fx**2 + fy**2 + fz**2); fx = fx / fn; fy = fy / fn; fz = fz / fn
+  rn = sqrt(fx**2 + fy**2); rx = fy / rn; ry = -fx / rn; rz = 0
+  ux = ry * fz - rz * fy; uy = rz * fx - rx * fz; uz = rx * fy - ry * fx
+  depth(x, y, z) = (x - ex) * fx + (y - ey) * fy + (z - ez) * fz
+  px(x, y, z) = ((x - ex) * rx + (y - ey) * ry + (z - ez) * rz) / depth(x, y, z)
+  py(x, y, z) = ((x - ex) * ux + (y - ey) * uy + (z - ez) * uz) / depth(x, y, z)
+  pz(x, y, z) = -depth(x, y, z)
+  ox = B_min_x; oy = B_min_y; oz = BZ_min
+  set arrow 1 from px(ox, oy, oz), py(ox, oy, oz), pz(ox, oy, oz) to px(B_max_x, oy, oz), py(B_max_x, oy, oz), pz(B_max_x, oy, oz) lw 1.5 lc rgb "#404040" front
+  set arrow 2 from px(ox, oy, oz), py(ox, oy, oz), pz(ox, oy, oz) to px(ox, B_max_y, oz), py(ox, B_max_y, oz), pz(ox, B_max_y, oz) lw 1.5 lc rgb "#404040" front
+  set arrow 3 from px(ox, oy, oz), py(ox, oy, oz), pz(ox, oy, oz) to px(ox, oy, BZ_max), py(ox, oy, BZ_max), pz(ox, oy, BZ_max) lw 1.5 lc rgb "#404040" front
+  set label 1 sprintf("x = %.2g", B_max_x) at px(B_max_x, oy, oz), py(B_max_x, oy, oz), pz(B_max_x, oy, oz) offset 0.5, 0 front
+  set label 2 sprintf("y = %.2g", B_max_y) at px(ox, B_max_y, oz), py(ox, B_max_y, oz), pz(ox, B_max_y, oz) offset 0.5, 0 front
+  set label 3 sprintf("z = %.2g", BZ_max) at px(ox, oy, BZ_max), py(ox, oy, BZ_max), pz(ox, oy, BZ_max) offset 0.5, 0 front
+  set label 4 sprintf("(%.2g, %.2g, %.2g)", ox, oy, oz) at px(ox, oy, oz), py(ox, oy, oz), pz(ox, oy, oz) offset -2, -1 front
 } else {
-  splot body with pm3d fillcolor rgb "#f0d8b0" title "body, five instants", \
-        curves with lines lc rgb "#c02020" lw 3 title "silhouette, (4) and (5)"
+  set title problem.": an oblique view" noenhanced
+  set view 62, 35, 1.0
+  set view equal xyz
+  set border 4095 lw 0.5 lc rgb "#808080"
+  set xlabel "x"; set ylabel "y"; set zlabel "z"
+}
+if (strlen(envelope) > 0) {
+  splot shell with pm3d fillstyle transparent solid 0.6 fillcolor rgb "#9ecae1" notitle, \
+        keyentry with boxes fill transparent solid 0.6 lc rgb "#9ecae1" title "envelope of the swept volume", \
+        body with pm3d fillcolor rgb "#f0d8b0" notitle, \
+        keyentry with boxes fill solid 1.0 lc rgb "#f0d8b0" title "body, five instants", \
+        curves with lines lc rgb "#a50f15" lw 4 title "silhouette, (4) and (5)"
+} else {
+  splot body with pm3d fillcolor rgb "#f0d8b0" notitle, \
+        keyentry with boxes fill solid 1.0 lc rgb "#f0d8b0" title "body, five instants", \
+        curves with lines lc rgb "#a50f15" lw 4 title "silhouette, (4) and (5)"
 }

@@ -334,6 +334,19 @@ std::string latexEscape(std::string_view text) {
   return out;
 }
 
+/// A LaTeX column title: escaped, on two lines (split at the space nearest its middle) in wide
+/// tables, so that they fit the text at a readable size.
+std::string latexColumnTitle(const std::string& title, bool wide) {
+  std::size_t split = std::string::npos;
+  for (std::size_t i = 0; i < title.size(); ++i)
+    if (title[i] == ' ' && (split == std::string::npos || std::abs(2.0 * i - title.size()) <
+                                                              std::abs(2.0 * split - title.size())))
+      split = i;
+  if (!wide || split == std::string::npos) return latexEscape(title);
+  return "\\begin{tabular}[b]{@{}c@{}}" + latexEscape(title.substr(0, split)) + "\\\\" +
+         latexEscape(title.substr(split + 1)) + "\\end{tabular}";
+}
+
 std::string toLatex(const Table& table) {
   std::string align;
   for (std::size_t c = 0; c < table.columns.size(); ++c)
@@ -342,11 +355,14 @@ std::string toLatex(const Table& table) {
                     ".csv: do not edit.\n";
   out += "\\begin{table}[htbp]\n  \\centering\n  \\caption{" + latexEscape(table.caption) +
          "}\n  \\label{" + table.id + "}\n";
-  // Shrink a table wider than the text to the text width, never enlarge it (graphicx).
+  // A readable size; shrink a table still wider than the text to the text width, never enlarge
+  // it (graphicx).
+  out += "  \\small\\setlength{\\tabcolsep}{4pt}\n";
   out += "  \\resizebox{\\ifdim\\width>\\linewidth\\linewidth\\else\\width\\fi}{!}{%\n";
   out += "  \\begin{tabular}{" + align + "}\n    \\toprule\n    ";
+  const bool wide = table.columns.size() > 8;
   for (std::size_t c = 0; c < table.columns.size(); ++c)
-    out += (c ? " & " : "") + latexEscape(table.columns[c]);
+    out += (c ? " & " : "") + latexColumnTitle(table.columns[c], wide);
   out += " \\\\\n    \\midrule\n";
   for (const auto& row : table.rows) {
     out += "    ";
@@ -394,7 +410,10 @@ std::string GnuplotScript::text() const {
          "," + std::to_string(height_) + " enhanced font \"Sans,11\"\n  } else {\n";
   char size[64];
   std::snprintf(size, sizeof size, "%.2fin,%.2fin", width_ / 150.0, height_ / 150.0);
-  out += "    set terminal pdfcairo size " + std::string(size) + " enhanced font \"Sans,8\"\n  }\n";
+  // Wide canvases are shrunk to the text width in the paper: a larger font keeps them readable.
+  const int pdfFont = static_cast<int>(std::lround(8 * std::max(1.0, width_ / 1000.0)));
+  out += "    set terminal pdfcairo size " + std::string(size) + " enhanced font \"Sans," +
+         std::to_string(pdfFont) + "\"\n  }\n";
   out += "  set output out.\".\".format\n";
   out += commands_;
   out += "  set output\n}\n";
@@ -447,6 +466,14 @@ std::string join(const std::vector<std::string>& parts, std::string_view separat
 }
 
 std::string percent(double value) { return formatFixed(value, 1) + "%"; }
+
+/// `prefix` and `sentence` as one sentence: "Table 1: our abnormal share ...".
+std::string prefixed(const std::string& prefix, std::string sentence) {
+  if (!sentence.empty() && std::isupper(static_cast<unsigned char>(sentence[0])) &&
+      !(sentence.size() > 1 && std::isupper(static_cast<unsigned char>(sentence[1]))))
+    sentence[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(sentence[0])));
+  return prefix + ": " + sentence;
+}
 
 bool isOk(const CsvTable& t, std::size_t r) { return t.cell(r, "status") == "ok"; }
 
@@ -633,19 +660,62 @@ int paperRowOf(const std::vector<PaperRow>& paper, const CsvTable& t, std::size_
   return best;
 }
 
-/// One of our results set beside the paper's row `paper` (-1: not in the paper).
+/// One setting of a run: a column of the CSV and its value, e.g. bounding = bernstein.
+struct Setting {
+  std::string column, value;
+};
+
+/// Table 1's main columns use the paper's settings: Bernstein bounding and its connection.
+const std::vector<Setting> kTable1Main = {{"bounding", "bernstein"}, {"connection", "paper"}};
+/// Table 1's extra columns: the abnormal share with one of these settings instead.
+const std::vector<Setting> kTable1Extra = {{"bounding", "linearized"}, {"connection", "crossing"}};
+
+bool hasSetting(const CsvTable& t, std::span<const std::size_t> rows, const Setting& s) {
+  return t.hasColumn(s.column) && std::any_of(rows.begin(), rows.end(), [&](std::size_t r) {
+           return t.cell(r, s.column) == s.value;
+         });
+}
+
+/// `rows` restricted to each of `settings` that some of them have (a setting no row has, e.g.
+/// an old CSV without Bernstein runs, does not filter).
+std::vector<std::size_t> withSettings(const CsvTable& t, std::vector<std::size_t> rows,
+                                      const std::vector<Setting>& settings) {
+  for (const Setting& s : settings)
+    if (hasSetting(t, rows, s))
+      std::erase_if(rows, [&](std::size_t r) { return t.cell(r, s.column) != s.value; });
+  return rows;
+}
+
+/// The rows of Table 1's main columns: the successful runs with the paper's settings.
+std::vector<std::size_t> table1MainRows(const CsvTable& t) {
+  return withSettings(t, okRows(t), kTable1Main);
+}
+
+/// The extra columns Table 1 has: the extra settings that some successful run used and the
+/// main columns do not.
+std::vector<Setting> table1Extras(const CsvTable& t) {
+  const std::vector<std::size_t> ok = okRows(t), main = table1MainRows(t);
+  std::vector<Setting> extras;
+  for (const Setting& s : kTable1Extra)
+    if (hasSetting(t, ok, s) && !hasSetting(t, main, s)) extras.push_back(s);
+  return extras;
+}
+
+/// One of our results set beside the paper's row `paper` (-1: not in the paper); `extra`: the
+/// abnormal share under each of table1Extras (NaN: no such run).
 struct Ours {
   std::string problem;
   int paper;
   double normal, abnormal, share, failed;
+  std::vector<double> extra;
 };
 
 /// Builds tab1-degeneracy's table row by row and collects our figures for the sentences.
 class Table1Rows {
  public:
   Table1Rows(const CsvTable& t, const std::vector<PaperRow>& paper,
-             const std::vector<std::string>& vary, Table& table)
-      : t_(t), paper_(paper), vary_(vary), table_(table) {}
+             const std::vector<std::string>& vary, const std::vector<Setting>& extras, Table& table)
+      : t_(t), paper_(paper), vary_(vary), extras_(extras), table_(table) {}
 
   /// Adds the row of group `g` (nullptr: the paper's example without a result of ours).
   void add(const Group* g, int paper) {
@@ -656,7 +726,8 @@ class Table1Rows {
     } else {
       row.push_back("(no result)");
       row.push_back(paper >= 0 ? std::to_string(paper_[paper].n) : "");
-      for (std::size_t c = 0; c < (vary_.empty() ? 4u : 5u); ++c) row.push_back(std::string(kDash));
+      const std::size_t dashes = (vary_.empty() ? 4u : 5u) + extras_.size();
+      for (std::size_t c = 0; c < dashes; ++c) row.push_back(std::string(kDash));
     }
     if (paper >= 0) {
       row.push_back(formatNumber(paper_[paper].normal));
@@ -671,24 +742,55 @@ class Table1Rows {
   std::vector<Ours> results;  ///< our groups, in table order
 
  private:
+  /// The mean abnormal share of the successful runs like `r0` (problem, depth, other varying
+  /// settings) but with `extra`, preferring those that keep the main columns' other settings.
+  double extraShare(std::size_t r0, const Setting& extra) const {
+    std::vector<std::size_t> like;
+    for (std::size_t r : okRows(t_)) {
+      bool same = t_.cell(r, "problem") == t_.cell(r0, "problem") &&
+                  t_.cell(r, "depth") == t_.cell(r0, "depth") &&
+                  t_.cell(r, extra.column) == extra.value;
+      for (const std::string& c : vary_) same = same && t_.cell(r, c) == t_.cell(r0, c);
+      if (same) like.push_back(r);
+    }
+    std::vector<Setting> others;
+    for (const Setting& s : kTable1Main)
+      if (s.column != extra.column) others.push_back(s);
+    like = withSettings(t_, std::move(like), others);
+    return like.empty() ? kNaN
+                        : abnormalShare(meanOf(t_, like, "cells.normal"),
+                                        meanOf(t_, like, "cells.abnormal"));
+  }
+
   void ours(const Group& g, int paper, std::vector<std::string>& row) {
     const std::size_t r0 = g.rows.front();
     const double normal = meanOf(t_, g.rows, "cells.normal");
     const double abnormal = meanOf(t_, g.rows, "cells.abnormal");
-    results.push_back({t_.cell(r0, "problem"), paper, normal, abnormal,
-                       abnormalShare(normal, abnormal), meanOf(t_, g.rows, "cells.failed")});
+    Ours o{t_.cell(r0, "problem"),
+           paper,
+           normal,
+           abnormal,
+           abnormalShare(normal, abnormal),
+           meanOf(t_, g.rows, "cells.failed"),
+           {}};
     row.push_back(t_.cell(r0, "problem"));
     row.push_back(t_.cell(r0, "n"));
     row.push_back(t_.cell(r0, "depth"));
     if (!vary_.empty()) row.push_back(settingsLabel(t_, r0, vary_));
     row.push_back(formatNumber(std::round(normal)));
     row.push_back(formatNumber(std::round(abnormal)));
-    row.push_back(formatFixed(abnormalShare(normal, abnormal), 1));
+    row.push_back(formatFixed(o.share, 1));
+    for (const Setting& s : extras_) {
+      o.extra.push_back(extraShare(r0, s));
+      row.push_back(formatFixed(o.extra.back(), 1));
+    }
+    results.push_back(std::move(o));
   }
 
   const CsvTable& t_;
   const std::vector<PaperRow>& paper_;
   const std::vector<std::string>& vary_;
+  const std::vector<Setting>& extras_;
   Table& table_;
 };
 
@@ -753,10 +855,27 @@ void highlightSentences(const std::vector<PaperRow>& paper, const std::vector<Ou
   }
 }
 
+/// "With linearized bounding ...": per extra column, its mean share beside the main one's.
+void extraSentences(const std::vector<Setting>& extras, const std::vector<Ours>& ours,
+                    std::vector<std::string>& sentences) {
+  for (std::size_t e = 0; e < extras.size(); ++e) {
+    std::vector<double> main, extra;
+    for (const Ours& o : ours)
+      if (e < o.extra.size() && std::isfinite(o.extra[e]) && std::isfinite(o.share))
+        main.push_back(o.share), extra.push_back(o.extra[e]);
+    if (extra.empty()) continue;
+    sentences.push_back("With " + extras[e].column + " `" + extras[e].value +
+                        "` instead the mean abnormal share over " + std::to_string(extra.size()) +
+                        " example(s) is " + percent(summarize(extra).mean) + " (" +
+                        percent(summarize(main).mean) + " in the main columns).");
+  }
+}
+
 /// What tab1-degeneracy shows: our range beside the paper's, by family, the highlighted rows,
-/// the cell count ratio and the failed cells.
+/// the extra columns, the cell count ratio and the failed cells.
 std::vector<std::string> table1Sentences(const std::vector<PaperRow>& paper,
-                                         const std::vector<Ours>& ours) {
+                                         const std::vector<Ours>& ours,
+                                         const std::vector<Setting>& extras = {}) {
   const auto [paperLo, paperHi] = paperShareRange(paper);
   if (ours.empty())
     return {"No run succeeded, so there is nothing to set beside the paper's figures (" +
@@ -774,6 +893,7 @@ std::vector<std::string> table1Sentences(const std::vector<PaperRow>& paper,
   if (std::string family = familySentence(paper, ours); !family.empty())
     sentences.push_back(std::move(family));
   highlightSentences(paper, ours, sentences);
+  extraSentences(extras, ours, sentences);
   // Cell counts against the paper's.
   std::vector<std::pair<double, double>> totals;
   for (const Ours& o : ours)
@@ -794,6 +914,90 @@ std::vector<std::string> table1Sentences(const std::vector<PaperRow>& paper,
   return sentences;
 }
 
+/// The settings of Table 1's main columns as used, e.g. "bounding `bernstein`, connection
+/// `paper`" ("" without such columns).
+std::string table1MainLabel(const CsvTable& t, std::span<const std::size_t> main) {
+  std::vector<std::string> parts;
+  for (const Setting& s : kTable1Main)
+    if (t.hasColumn(s.column) && !main.empty())
+      parts.push_back(s.column + " " + t.cell(main.front(), s.column));
+  return join(parts, ", ");
+}
+
+/// tab1-degeneracy's header: the example, ours, the extra shares, the paper's.
+Table table1Header(const std::string& id, const std::vector<std::string>& vary,
+                   const std::vector<Setting>& extras, const std::string& mainLabel) {
+  Table table;
+  table.id = id;
+  table.caption =
+      "Normal and abnormal solution cells (paper's Table 1), ours beside the paper's; "
+      "abnormal % = abnormal / (normal + abnormal)" +
+      (mainLabel.empty() ? std::string() : "; ours with " + mainLabel + ", as in the paper") +
+      (extras.empty() ? std::string(".")
+                      : "; the extra columns: the abnormal % with one setting changed.");
+  table.columns = {"example", "problem", "n", "depth"};
+  table.align = vary.empty() ? "llrr" : "llrrl";
+  if (!vary.empty()) table.columns.push_back("settings");
+  for (std::string c : {"normal", "abnormal", "abnormal %"}) table.columns.push_back(c);
+  for (const Setting& s : extras) table.columns.push_back("abnormal % " + s.value);
+  for (std::string c : {"paper normal", "paper abnormal", "paper abnormal %"})
+    table.columns.push_back(c);
+  table.align += std::string(6 + extras.size(), 'r');
+  return table;
+}
+
+/// tab1-degeneracy's bar chart: per example of the paper the abnormal share, ours (the first
+/// depth of ours, main columns and the extra ones) beside the paper's.
+std::string table1Chart(const std::string& id, const std::vector<PaperRow>& paper,
+                        const std::vector<Ours>& ours, const std::vector<Setting>& extras) {
+  std::vector<std::vector<double>> bars;
+  std::vector<std::string> tics;
+  for (std::size_t p = 0; p < paper.size(); ++p) {
+    std::vector<double> row = {static_cast<double>(p), kNaN};
+    row.resize(2 + extras.size(), kNaN);
+    for (const Ours& o : ours)
+      if (o.paper == static_cast<int>(p) && !std::isfinite(row[1])) {
+        row[1] = o.share;
+        for (std::size_t e = 0; e < extras.size() && e < o.extra.size(); ++e)
+          row[2 + e] = o.extra[e];
+      }
+    row.push_back(paper[p].share);
+    bars.push_back(std::move(row));
+    const std::size_t comma = paper[p].label.find(", ");
+    tics.push_back("\"" + paper[p].label.substr(0, comma) + "\\n" +
+                   (comma == std::string::npos ? "" : paper[p].label.substr(comma + 2)) + "\" " +
+                   std::to_string(p));
+  }
+  // One bar per series, side by side around each example.
+  static const char* colours[] = {"#3a6ea5", "#9ecae1", "#c6dbef", "#d62728"};
+  std::vector<std::string> titles = {"ours (Bernstein, paper's connection)"};
+  for (const Setting& s : extras) titles.push_back("ours, " + s.column + " " + s.value);
+  titles.push_back("paper (Table 1)");
+  const double width = 0.8 / static_cast<double>(titles.size());
+  GnuplotScript gp(id, 1100, 520);
+  gp.data("bars", bars);
+  gp.command("set title \"" + id + ": abnormal share per example, ours beside the paper's\"");
+  gp.command("set ylabel \"abnormal share (%)\"");
+  gp.command("set yrange [0:100]");
+  gp.command("set xrange [-0.6:" + formatFixed(paper.size() - 0.4, 1) + "]");
+  gp.command("set xtics (" + join(tics, ", ") + ") noenhanced");
+  gp.command("set grid ytics");
+  gp.command("set bmargin 4");
+  gp.command("set key top left");
+  gp.command("set style fill solid 0.9 border lc rgb \"#404040\"");
+  gp.command("set boxwidth " + formatFixed(width, 3) + " absolute");
+  std::vector<std::string> plots;
+  for (std::size_t s = 0; s < titles.size(); ++s) {
+    const double offset = (static_cast<double>(s) - 0.5 * (titles.size() - 1)) * width;
+    const std::string colour =
+        s + 1 == titles.size() ? colours[3] : colours[std::min<std::size_t>(s, 2)];
+    plots.push_back("$bars using ($1+" + formatFixed(offset, 3) + "):" + std::to_string(s + 2) +
+                    " with boxes lc rgb \"" + colour + "\" title \"" + titles[s] + "\"");
+  }
+  gp.command("plot " + join(plots, ", \\\n       "));
+  return gp.text();
+}
+
 Artefact tab1Degeneracy(const std::string& id, const CsvTable& t,
                         const std::vector<PaperRow>& paper) {
   requireRunColumns(t);
@@ -802,27 +1006,19 @@ Artefact tab1Degeneracy(const std::string& id, const CsvTable& t,
   Artefact a;
   a.id = id;
   a.title = "Table 1 reproduced: normal and abnormal solution cells";
-  // One group per problem, depth and varying setting.
-  const std::vector<std::string> vary = without(varyingColumns(t, kSettingColumns), {"depth"});
+  // The main columns: the runs with the paper's settings, one group per problem, depth and
+  // other varying setting; the extra columns: one setting changed.
+  const std::vector<std::size_t> main = table1MainRows(t);
+  const std::vector<Setting> extras = table1Extras(t);
+  const std::vector<std::string> vary =
+      without(varyingColumns(t, kSettingColumns), {"depth", "bounding", "connection"});
   std::vector<std::string> keys = {"problem", "depth"};
   keys.insert(keys.end(), vary.begin(), vary.end());
-  const std::vector<Group> groups = groupBy(t, keys, okRows(t));
-
-  // The table's header.
-  Table table;
-  table.id = id;
-  table.caption =
-      "Normal and abnormal solution cells (paper's Table 1), ours beside the paper's; "
-      "abnormal % = abnormal / (normal + abnormal).";
-  table.columns = {"example", "problem", "n", "depth"};
-  if (!vary.empty()) table.columns.push_back("settings");
-  for (std::string c :
-       {"normal", "abnormal", "abnormal %", "paper normal", "paper abnormal", "paper abnormal %"})
-    table.columns.push_back(c);
-  table.align = std::string(vary.empty() ? "llrr" : "llrrl") + "rrrrrr";
+  const std::vector<Group> groups = groupBy(t, keys, main);
+  Table table = table1Header(id, vary, extras, table1MainLabel(t, main));
 
   // The paper's order, then our problems that are not in the paper.
-  Table1Rows rows(t, paper, vary, table);
+  Table1Rows rows(t, paper, vary, extras, table);
   std::vector<bool> used(groups.size(), false);
   for (std::size_t p = 0; p < paper.size(); ++p) {
     bool any = false;
@@ -837,8 +1033,15 @@ Artefact tab1Degeneracy(const std::string& id, const CsvTable& t,
     if (!used[g]) rows.add(&groups[g], -1);
   a.tables.push_back(std::move(table));
 
-  // What it shows.
-  a.sentences = table1Sentences(paper, rows.results);
+  // What it shows, and the bar chart.
+  a.sentences = table1Sentences(paper, rows.results, extras);
+  if (rows.results.empty()) return a;
+  a.gnuplot = table1Chart(id, paper, rows.results, extras);
+  // For the conclusion: the range and the families beside the paper's.
+  a.conclusion.push_back(prefixed("In Table 1", a.sentences.front()));
+  if (std::string family = familySentence(paper, rows.results); !family.empty())
+    a.conclusion.push_back(family);
+  highlightSentences(paper, rows.results, a.conclusion);
   return a;
 }
 
@@ -1018,6 +1221,10 @@ Artefact figDegeneracyVsN(const std::string& id, const CsvTable& t,
                     formatFixed(plot.nMax + 0.5, 1) + "]");
     plot.gp.command("plot " + join(plot.plots, ", \\\n       "));
     a.gnuplot = plot.gp.text();
+    // For the conclusion: the trend per k.
+    for (const std::string& sentence : a.sentences)
+      if (sentence.starts_with("For "))
+        a.conclusion.push_back(prefixed("Degeneracy against n", sentence));
   } else {
     a.sentences.push_back("No run succeeded, so there is no curve.");
   }
@@ -1166,6 +1373,8 @@ Artefact tabAblation(const std::string& id, const CsvTable& t, const std::string
     a.sentences.push_back("No run succeeded, so there is nothing to compare.");
   else
     a.sentences = ablationSentences(data);
+  if (!data.variants.empty())
+    a.conclusion.push_back(prefixed("Ablation of the " + family, a.sentences.front()));
   return a;
 }
 
@@ -1375,6 +1584,8 @@ Artefact tabConnection(const std::string& id, const CsvTable& t) {
   a.tables.push_back(connectionScoreTable(id, check, keys, scores));
   a.tables.push_back(connectionDetailTable(id, check, other));
   a.sentences = connectionSentences(scores);
+  if (!a.sentences.empty())
+    a.conclusion.push_back(prefixed("Connection strategies", a.sentences.front()));
   return a;
 }
 
@@ -1471,6 +1682,54 @@ void convergenceSeries(const CsvTable& t, const Group& g, std::size_t s,
                       formatNumber(res.min, 2) + " and " + formatNumber(res.max, 2) + ".");
 }
 
+/// The x range of fig-convergence from the data: the smallest to the largest h of the successful
+/// runs, a little beyond (log autoscaling would run on to the next power of ten, e.g. 1).
+void convergenceRange(GnuplotScript& gp, const CsvTable& t) {
+  const std::vector<std::size_t> ok = okRows(t);
+  const Stats depth = summarize(values(t, ok, "depth"));
+  if (depth.count == 0) return;
+  const double hMin = std::ldexp(1.0, -static_cast<int>(depth.max)),
+               hMax = std::ldexp(1.0, -static_cast<int>(depth.min));
+  gp.command("set xrange [" + formatNumber(hMin / 1.25, 4) + ":" + formatNumber(hMax * 1.25, 4) +
+             "]");
+  // A tic at every depth: h = 2^-depth.
+  std::vector<std::string> tics;
+  for (int d = static_cast<int>(depth.min); d <= static_cast<int>(depth.max); ++d)
+    tics.push_back("\"2^{-" + std::to_string(d) + "}\" " + formatNumber(std::ldexp(1.0, -d), 6));
+  gp.command("set xtics (" + join(tics, ", ") + ")");
+}
+
+/// The conclusion of fig-convergence: the range of the fitted orders of the chord error and of
+/// the cell counts over the series with two depths or more.
+std::vector<std::string> convergenceConclusion(const CsvTable& t,
+                                               const std::vector<Group>& series) {
+  std::vector<double> chord, cells1, cells2;
+  for (const Group& g : series) {
+    std::vector<double> h, e, c;
+    for (const Group& d : groupBy(t, std::vector<std::string>{"depth"}, g.rows)) {
+      h.push_back(std::ldexp(1.0, -std::stoi(d.key[0])));
+      e.push_back(meanOf(t, d.rows, "accuracy.max_chord_error"));
+      c.push_back(meanOf(t, d.rows, "cells.solution"));
+    }
+    if (h.size() < 2) continue;
+    chord.push_back(logLogSlope(h, e));
+    (t.cell(g.rows.front(), "k") == "1" ? cells1 : cells2).push_back(-logLogSlope(h, c));
+  }
+  if (chord.empty()) return {};
+  const auto range = [](const std::vector<double>& v) {
+    const Stats s = summarize(v);
+    return formatFixed(s.min, 2) + (s.max - s.min > 0.005 ? " to " + formatFixed(s.max, 2) : "");
+  };
+  std::string sentence = "Convergence: over " + std::to_string(chord.size()) +
+                         " series the chord error falls with order " + range(chord) +
+                         " in h (expected 2)";
+  if (!cells1.empty())
+    sentence += ", the cells of curves grow with order " + range(cells1) + " (expected 1)";
+  if (!cells2.empty())
+    sentence += ", those of surfaces with order " + range(cells2) + " (expected 2)";
+  return {sentence + "."};
+}
+
 /// Adds the guides and plots the four panels of fig-convergence.
 void convergencePanels(GnuplotScript& gp, std::array<std::vector<std::string>, 4>& panels,
                        const ConvergenceGuides& guides) {
@@ -1534,7 +1793,9 @@ Artefact figConvergence(const std::string& id, const CsvTable& t) {
     a.tables.push_back(std::move(data));
     return a;
   }
+  convergenceRange(gp, t);
   convergencePanels(gp, panels, guides);
+  a.conclusion = convergenceConclusion(t, series);
   a.gnuplot = gp.text();
   a.tables.push_back(std::move(data));
   return a;
@@ -1694,14 +1955,284 @@ std::vector<std::size_t> applicationRuns(const CsvTable& t, const std::filesyste
   return picks;
 }
 
-/// A mesh's segments or triangles as gnuplot polygons (a blank row after each).
-std::vector<std::vector<double>> meshPolygons(const PlyMesh& m) {
+}  // namespace
+
+std::vector<std::vector<int>> chainSegments(const std::vector<std::vector<int>>& segments) {
+  // Which segments meet at each vertex.
+  std::map<int, std::vector<std::size_t>> at;
+  for (std::size_t s = 0; s < segments.size(); ++s)
+    if (segments[s].size() == 2)
+      for (int v : segments[s]) at[v].push_back(s);
+  std::vector<bool> used(segments.size(), false);
+  std::vector<std::vector<int>> lines;
+  // Walks from `start` along unused segments until it ends or closes.
+  const auto walk = [&](int start) {
+    std::vector<int> line = {start};
+    for (int v = start;;) {
+      const auto next =
+          std::find_if(at[v].begin(), at[v].end(), [&](std::size_t s) { return !used[s]; });
+      if (next == at[v].end()) break;
+      used[*next] = true;
+      v = segments[*next][0] == v ? segments[*next][1] : segments[*next][0];
+      line.push_back(v);
+    }
+    if (line.size() > 1) lines.push_back(std::move(line));
+  };
+  // Open ends and branch points first, then the closed loops.
+  for (const auto& [v, touching] : at)
+    if (touching.size() != 2)
+      while (std::any_of(touching.begin(), touching.end(), [&](std::size_t s) { return !used[s]; }))
+        walk(v);
+  for (std::size_t s = 0; s < segments.size(); ++s)
+    if (!used[s] && segments[s].size() == 2) walk(segments[s][0]);
+  return lines;
+}
+
+std::vector<std::vector<double>> polylineRows(const std::vector<std::vector<int>>& lines,
+                                              const std::vector<std::array<double, 3>>& points) {
   std::vector<std::vector<double>> rows;
-  for (const auto& s : m.simplices) {
-    for (int v : s) rows.push_back({m.xyz[v][0], m.xyz[v][1], m.xyz[v][2]});
+  for (const std::vector<int>& line : lines) {
+    for (int v : line) rows.push_back({points[v][0], points[v][1], points[v][2]});
+    // Two blank lines: a new data set, so that splot draws no line to the next polyline.
+    rows.push_back({});
     rows.push_back({});
   }
   return rows;
+}
+
+namespace {
+
+/// Where a 3-D point is drawn: unchanged (gnuplot's own orthographic view), or projected
+/// through an eye point (x, y: the perspective image, z: minus the distance along the view
+/// direction, so that `set view 0,0` shows the perspective picture and pm3d sorts by depth).
+struct View {
+  bool perspective = false;
+  std::array<double, 3> eye{}, right{}, up{}, forward{};
+
+  std::array<double, 3> operator()(const std::array<double, 3>& p) const {
+    if (!perspective) return p;
+    const std::array<double, 3> d = {p[0] - eye[0], p[1] - eye[1], p[2] - eye[2]};
+    const auto dot = [&](const std::array<double, 3>& a) {
+      return a[0] * d[0] + a[1] * d[1] + a[2] * d[2];
+    };
+    const double depth = std::max(dot(forward), 1e-9);
+    return {dot(right) / depth, dot(up) / depth, -depth};
+  }
+};
+
+std::array<double, 3> normalize(std::array<double, 3> a) {
+  const double length = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+  for (double& x : a) x = length > 0 ? x / length : 0;
+  return a;
+}
+
+std::array<double, 3> cross(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+
+/// The perspective view from `eye` towards `target`, world z up.
+View perspectiveView(const std::array<double, 3>& eye, const std::array<double, 3>& target) {
+  View v;
+  v.perspective = true;
+  v.eye = eye;
+  v.forward = normalize({target[0] - eye[0], target[1] - eye[1], target[2] - eye[2]});
+  v.right = normalize(cross(v.forward, {0, 0, 1}));
+  if (v.right == std::array<double, 3>{0, 0, 0}) v.right = {1, 0, 0};  // looking straight down
+  v.up = cross(v.right, v.forward);
+  return v;
+}
+
+/// The eye point of the run's problem file (`eye = [x, y, z]`, the sweep silhouette's), if any.
+std::optional<std::array<double, 3>> problemEye(const CsvTable& t, std::size_t r) {
+  const std::filesystem::path file = t.cell(r, "problem_file");
+  std::error_code error;
+  if (file.empty() || !std::filesystem::is_regular_file(file, error)) return std::nullopt;
+  const toml::table top = parseTomlText(readText(file), file.string());
+  const toml::array* eye = top["eye"].as_array();
+  if (!eye || eye->size() != 3) return std::nullopt;
+  std::array<double, 3> p{};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const std::optional<double> x = (*eye)[i].value<double>();
+    if (!x) return std::nullopt;
+    p[i] = *x;
+  }
+  return p;
+}
+
+/// A mesh's vertices through `view`.
+std::vector<std::array<double, 3>> viewed(const std::vector<std::array<double, 3>>& xyz,
+                                          const View& view) {
+  std::vector<std::array<double, 3>> out;
+  out.reserve(xyz.size());
+  for (const auto& p : xyz) out.push_back(view(p));
+  return out;
+}
+
+/// A mesh's triangles for `with pm3d` (shaded, lit): each a 2 x 2 grid a b / c c, a blank line
+/// inside and two after it.
+std::vector<std::vector<double>> trianglePm3d(const PlyMesh& m, const View& view) {
+  const std::vector<std::array<double, 3>> p = viewed(m.xyz, view);
+  std::vector<std::vector<double>> rows;
+  for (const auto& s : m.simplices) {
+    if (s.size() != 3) continue;
+    const auto row = [&](int v) { return std::vector<double>{p[v][0], p[v][1], p[v][2]}; };
+    rows.insert(rows.end(), {row(s[0]), row(s[1]), {}, row(s[2]), row(s[2]), {}, {}});
+  }
+  return rows;
+}
+
+/// The bounding box of points: {min, max} per axis.
+std::array<std::array<double, 2>, 3> boundingBox(const std::vector<std::array<double, 3>>& points) {
+  std::array<std::array<double, 2>, 3> box;
+  for (auto& b : box) b = {HUGE_VAL, -HUGE_VAL};
+  for (const auto& p : points)
+    for (int j = 0; j < 3; ++j)
+      if (std::isfinite(p[j])) box[j] = {std::min(box[j][0], p[j]), std::max(box[j][1], p[j])};
+  return box;
+}
+
+/// The surface result of another application run over the same input (identical input.ply),
+/// e.g. the envelope of the sweep a silhouette run looks at; empty when there is none.
+std::filesystem::path sameInputSurface(const std::filesystem::path& run) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  if (!fs::exists(run / "input.ply")) return {};
+  const std::string input = readText(run / "input.ply");
+  const fs::path results = run.parent_path().parent_path().parent_path();
+  std::vector<fs::path> candidates;
+  for (const auto& e : fs::directory_iterator(results, error))
+    if (e.path().filename().string().starts_with("fig-app-") && fs::is_directory(e.path() / "runs"))
+      for (const auto& other : fs::directory_iterator(e.path() / "runs", error))
+        if (other.path() != run && fs::exists(other.path() / "mesh.ply") &&
+            fs::file_size(other.path() / "input.ply", error) == input.size())
+          candidates.push_back(other.path());
+  std::sort(candidates.begin(), candidates.end());
+  for (const fs::path& c : candidates)
+    if (readText(c / "input.ply") == input && readPly(c / "mesh.ply").simplices.size() &&
+        readPly(c / "mesh.ply").simplices.front().size() == 3)
+      return c;
+  return {};
+}
+
+/// What a panel of fig-app-* draws: the data blocks' plot clauses, back to front, and the
+/// points that set the view box.
+struct Panel {
+  std::vector<std::string> plots;
+  std::vector<std::array<double, 3>> box;  ///< input points (the view box when there are any)
+};
+
+/// The input surfaces (input.ply) lightly shaded, and the envelope of a sweep over the same
+/// input when the run is a silhouette, in a light blue.
+void plotContext(GnuplotScript& gp, const std::filesystem::path& run, std::size_t p,
+                 const View& view, Panel& panel) {
+  if (std::filesystem::exists(run / "input.ply")) {
+    const PlyMesh input = readPly(run / "input.ply");
+    gp.data("input" + std::to_string(p), trianglePm3d(input, view));
+    panel.plots.push_back("$input" + std::to_string(p) +
+                          " with pm3d fs transparent solid 0.35 fc rgb \"#bdbdbd\" notitle");
+    panel.plots.push_back(
+        "keyentry with boxes fill transparent solid 0.35 lc rgb \"#bdbdbd\" title \"input\"");
+    panel.box = input.xyz;
+  }
+  if (!view.perspective) return;
+  const std::filesystem::path envelope = sameInputSurface(run);
+  if (envelope.empty()) return;
+  gp.data("envelope" + std::to_string(p), trianglePm3d(readPly(envelope / "mesh.ply"), view));
+  panel.plots.push_back("$envelope" + std::to_string(p) +
+                        " with pm3d fs transparent solid 0.6 fc rgb \"#9ecae1\" notitle");
+  panel.plots.push_back(
+      "keyentry with boxes fill transparent solid 0.6 lc rgb \"#9ecae1\" title \"envelope (" +
+      envelope.filename().string().substr(0, envelope.filename().string().find('.')) + ")\"");
+}
+
+/// The convex hull's ruled surface (ruled.ply: the first contact points, then the second): the
+/// second contact curve in bold and every few bitangent segments in light lines, as in Fig. 6.
+void plotRuled(GnuplotScript& gp, const PlyMesh& mesh, const std::filesystem::path& run,
+               std::size_t p, const View& view, Panel& panel) {
+  if (!std::filesystem::exists(run / "ruled.ply")) return;
+  const PlyMesh ruled = readPly(run / "ruled.ply");
+  const std::size_t count = mesh.xyz.size();
+  if (ruled.xyz.size() != 2 * count || count == 0) return;
+  const std::vector<std::array<double, 3>> points = viewed(ruled.xyz, view);
+  std::vector<std::vector<int>> segments, second;
+  const std::size_t every = std::max<std::size_t>(1, count / 80);
+  for (std::size_t v = 0; v < count; v += every)
+    segments.push_back({static_cast<int>(v), static_cast<int>(v + count)});
+  for (const auto& s : mesh.simplices)
+    if (s.size() == 2)
+      second.push_back({s[0] + static_cast<int>(count), s[1] + static_cast<int>(count)});
+  gp.data("rulings" + std::to_string(p), polylineRows(segments, points));
+  gp.data("second" + std::to_string(p), polylineRows(chainSegments(second), points));
+  panel.plots.push_back("$rulings" + std::to_string(p) +
+                        " with lines lw 0.8 lc rgb \"#6baed6\" title \"bitangent segments\"");
+  panel.plots.push_back("$second" + std::to_string(p) +
+                        " with lines lw 3 lc rgb \"#a50f15\" notitle");
+}
+
+/// The result: a curve in thick lines (chained into polylines), a surface solid and lit.
+void plotResult(GnuplotScript& gp, const PlyMesh& mesh, std::size_t p, bool curve, const View& view,
+                Panel& panel) {
+  const std::string name = "mesh" + std::to_string(p);
+  if (curve) {
+    gp.data(name, polylineRows(chainSegments(mesh.simplices), viewed(mesh.xyz, view)));
+    panel.plots.push_back("$" + name + " with lines lw 3 lc rgb \"#a50f15\" title \"result\"");
+  } else {
+    gp.data(name, trianglePm3d(mesh, view));
+    panel.plots.push_back("$" + name + " with pm3d fc rgb \"#3a6ea5\" notitle");
+    panel.plots.push_back("keyentry with boxes fill solid 1.0 lc rgb \"#3a6ea5\" title \"result\"");
+  }
+}
+
+/// The axes of an orthographic panel: a box with tics, the view box from the input surfaces
+/// (grown by 15% of their diagonal; farther parts of the result, e.g. of an untrimmed
+/// bisector, are clipped) or from everything when there is no input.
+void orthographicAxes(GnuplotScript& gp, const Panel& panel) {
+  gp.command("set view 62, 35, 1.2");
+  gp.command("set view equal xyz");
+  gp.command("set border 4095 lw 0.5 lc rgb \"#808080\"");
+  gp.command("set xtics; set ytics; set ztics");
+  gp.command("set xlabel \"x\"; set ylabel \"y\"; set zlabel \"z\"");
+  if (panel.box.empty()) {
+    gp.command("set autoscale");
+    return;
+  }
+  const auto box = boundingBox(panel.box);
+  const double grow =
+      0.15 * std::sqrt(std::pow(box[0][1] - box[0][0], 2) + std::pow(box[1][1] - box[1][0], 2) +
+                       std::pow(box[2][1] - box[2][0], 2));
+  const char* axes[] = {"x", "y", "z"};
+  for (int j = 0; j < 3; ++j)
+    gp.command(std::string("set ") + axes[j] + "range [" + formatNumber(box[j][0] - grow, 6) + ":" +
+               formatNumber(box[j][1] + grow, 6) + "]");
+}
+
+/// The axes of a perspective panel: the world axes x, y, z drawn from the data's lowest corner
+/// through the eye, labelled with their end values (gnuplot's own axes would be the image's).
+void perspectiveAxes(GnuplotScript& gp, const View& view,
+                     const std::array<std::array<double, 2>, 3>& box, std::size_t p) {
+  gp.command("set view 0, 0, 2.4");
+  gp.command("set view equal xy");
+  gp.command("unset border; unset xtics; unset ytics; unset ztics");
+  gp.command("unset xlabel; unset ylabel; unset zlabel");
+  // Fit the picture exactly (autoscaling would extend the ranges to tic values).
+  gp.command("set autoscale fix");
+  const std::array<double, 3> origin = {box[0][0], box[1][0], box[2][0]};
+  std::vector<std::vector<double>> rows;
+  gp.command("unset label");
+  const char* names[] = {"x", "y", "z"};
+  for (int j = 0; j < 3; ++j) {
+    std::array<double, 3> end = origin;
+    end[j] = box[j][1];
+    const auto a = view(origin), b = view(end);
+    rows.push_back({a[0], a[1], a[2]});
+    rows.push_back({b[0], b[1], b[2]});
+    rows.push_back({});
+    rows.push_back({});
+    gp.command("set label " + std::to_string(j + 1) + " \"" + names[j] + " = " +
+               formatNumber(box[j][1], 2) + "\" at " + formatNumber(b[0], 6) + "," +
+               formatNumber(b[1], 6) + "," + formatNumber(b[2], 6) + " front");
+  }
+  gp.data("axes" + std::to_string(p), rows);
 }
 
 /// What the mesh of run `r` is: vertices, simplices, topology, residual and time.
@@ -1723,38 +2254,39 @@ std::string applicationSentence(const CsvTable& t, std::size_t r, const PlyMesh&
          formatNumber(t.number(r, "timing_s.total"), 2) + " s.";
 }
 
-/// Plots the mesh of run `r` as panel `p` (with the application's input and ruled surfaces
-/// behind it); returns its sentence.
+/// Plots the mesh of run `r` as panel `p` in the manner of the paper's Figures 6-10: the input
+/// surfaces lightly shaded, the result solid (thick curves, lit surfaces), in perspective from
+/// the problem's eye point when it has one (the silhouette, Fig. 7); returns its sentence.
 std::string plotApplicationRun(GnuplotScript& gp, const CsvTable& t, std::size_t r, std::size_t p,
                                const std::filesystem::path& run) {
   const PlyMesh mesh = readPly(run / "mesh.ply");
-  const std::string name = "mesh" + std::to_string(p);
-  gp.data(name, meshPolygons(mesh));
-  // An application's input surfaces (input.ply) and ruled surface (ruled.ply, e.g. the
-  // convex hull's bitangent segments) are drawn behind the result, as in Figures 6-10.
-  std::string context;
-  for (const auto& [file, style] :
-       {std::pair<std::string, std::string>{"input",
-                                            "fs transparent solid 0.3 fc rgb "
-                                            "\"#969696\""},
-        std::pair<std::string, std::string>{"ruled",
-                                            "fs transparent solid 0.5 fc rgb "
-                                            "\"#fdae6b\""}}) {
-    if (!std::filesystem::exists(run / (file + ".ply"))) continue;
-    const std::string block = file + std::to_string(p);
-    gp.data(block, meshPolygons(readPly(run / (file + ".ply"))));
-    context += "$" + block + " with polygons " + style + ", ";
-  }
   const bool curve = t.cell(r, "k") == "1";
+  // The view: through the eye point, aimed at the centre of the result.
+  View view;
+  const std::optional<std::array<double, 3>> eye = problemEye(t, r);
+  const auto resultBox = boundingBox(mesh.xyz);
+  if (eye && !mesh.xyz.empty())
+    view = perspectiveView(
+        *eye, {0.5 * (resultBox[0][0] + resultBox[0][1]), 0.5 * (resultBox[1][0] + resultBox[1][1]),
+               0.5 * (resultBox[2][0] + resultBox[2][1])});
+  // Back to front: the input (and envelope), the rulings, the result.
+  Panel panel;
+  plotContext(gp, run, p, view, panel);
+  plotRuled(gp, mesh, run, p, view, panel);
+  plotResult(gp, mesh, p, curve, view, panel);
   gp.command("set title \"" + t.cell(r, "problem") + " (n = " + t.cell(r, "n") + ", depth " +
-             t.cell(r, "depth") + ")\"");
-  // Small meshes alone show their triangles; others are shaded by z only.
-  gp.command(mesh.simplices.size() < 4000 && context.empty()
-                 ? "set pm3d depthorder border lc rgb \"#3a6ea5\" lw 0.3"
-                 : "set pm3d depthorder noborder");
-  gp.command("splot " + context +
-             (curve ? "$" + name + " with lines lw 2 lc rgb \"#08519c\""
-                    : "$" + name + " with polygons fc palette z"));
+             t.cell(r, "depth") + (view.perspective ? ", perspective from the eye" : "") +
+             ")\" noenhanced");
+  if (view.perspective) {
+    std::vector<std::array<double, 3>> all = panel.box.empty() ? mesh.xyz : panel.box;
+    perspectiveAxes(gp, view, boundingBox(all), p);
+    panel.plots.push_back("$axes" + std::to_string(p) +
+                          " with lines lw 1 lc rgb \"#404040\" notitle");
+  } else {
+    gp.command("unset label");
+    orthographicAxes(gp, panel);
+  }
+  gp.command("splot " + join(panel.plots, ", \\\n        "));
   return applicationSentence(t, r, mesh);
 }
 
@@ -1774,21 +2306,21 @@ Artefact figApplication(const std::string& id, const CsvTable& t,
     a.sentences.push_back("No successful run with a mesh.ply, so there is no picture.");
     return a;
   }
-  // The canvas: up to three panels per row.
-  const int columns = static_cast<int>(std::min<std::size_t>(picks.size(), 3));
+  // The canvas: up to two large panels per row; one per row for perspective views, whose
+  // pictures are wide and flat.
+  const bool perspective = std::any_of(picks.begin(), picks.end(),
+                                       [&](std::size_t r) { return problemEye(t, r).has_value(); });
+  const int columns = perspective ? 1 : static_cast<int>(std::min<std::size_t>(picks.size(), 2));
   const int rowsCount = static_cast<int>((picks.size() + columns - 1) / columns);
-  GnuplotScript gp(id, 500 * columns, 480 * rowsCount);
+  GnuplotScript gp(id, perspective ? 1400 : 800 * columns, (perspective ? 560 : 700) * rowsCount);
   if (picks.size() > 1)
     gp.command("set multiplot layout " + std::to_string(rowsCount) + "," + std::to_string(columns) +
-               " title \"" + id + "\"");
-  gp.command("set view equal xyz");
+               " title \"" + id + "\" noenhanced");
   gp.command("set xyplane relative 0");
-  gp.command("set xlabel \"x\"");
-  gp.command("set ylabel \"y\"");
-  gp.command("set zlabel \"z\"");
-  gp.command("set palette defined (0 \"#08519c\", 1 \"#6baed6\", 2 \"#c6dbef\")");
+  gp.command("set pm3d depthorder noborder clip z");
+  gp.command("set pm3d lighting primary 0.5 specular 0.2");
   gp.command("unset colorbox");
-  gp.command("unset key");
+  gp.command("set key top right samplen 2");
   // One panel per run.
   for (std::size_t p = 0; p < picks.size(); ++p) {
     const std::size_t r = picks[p];
@@ -2012,6 +2544,9 @@ struct Section {
   std::string id, status, body;
   std::size_t runs = 0, failed = 0;
   bool figure = false;
+  std::vector<std::string> conclusion;  ///< the artefact's sentences for the conclusion
+  std::size_t certified = 0;            ///< runs whose every cell is certified
+  std::size_t withCertificate = 0;      ///< runs that attempted the topology certificate
 };
 
 /// What writeReport shares between the artefacts.
@@ -2023,12 +2558,39 @@ struct ReportRun {
   std::ostream& log;
 };
 
-/// Writes `<id>.md` and `<id>.tex` of a table artefact; returns its report.md body.
-std::string writeTableFiles(const Artefact& a, const std::filesystem::path& dir) {
+/// Writes `<id>.gp` of an artefact with a chart and renders it; returns its report.md lines.
+/// `renderNote` says why the chart was not rendered (empty when it was).
+std::string writeGnuplotFiles(const ReportRun& run, const Artefact& a,
+                              const std::filesystem::path& dir, std::string& renderNote) {
+  const std::string& id = a.id;
+  if (a.gnuplot.empty()) return "";
+  std::string body;
+  writeAtomically(dir / (id + ".gp"), a.gnuplot);
+  if (run.render) {
+    const std::string problem = renderGnuplot(dir, id);
+    if (!problem.empty()) {
+      run.outcome.errors.push_back(id + ": " + problem);
+      renderNote = "**Not rendered**: " + problem + ".";
+    }
+  } else {
+    renderNote = "*Not rendered (gnuplot is not on PATH)*; script: [" + id + ".gp](" + id + "/" +
+                 id + ".gp).";
+  }
+  if (renderNote.empty() || std::filesystem::exists(dir / (id + ".png")))
+    body += "![" + id + "](" + id + "/" + id + ".png)\n\n";
+  if (!renderNote.empty()) body += renderNote + "\n\n";
+  return body;
+}
+
+/// Writes `<id>.md` and `<id>.tex` of a table artefact, and its chart when it has one;
+/// returns its report.md body.
+std::string writeTableFiles(const ReportRun& run, const Artefact& a,
+                            const std::filesystem::path& dir, std::string& renderNote) {
   writeAtomically(dir / (a.id + ".md"), artefactMarkdown(a));
   writeAtomically(dir / (a.id + ".tex"), toLatex(a.tables.front()));
   std::string body;
   for (const Table& t : a.tables) body += t.caption + "\n\n" + toMarkdown(t) + "\n";
+  body += writeGnuplotFiles(run, a, dir, renderNote);
   return body + paragraph(a.sentences) + "\n\n";
 }
 
@@ -2067,25 +2629,8 @@ std::string applicationRunImages(const ReportRun& run, const Artefact& a,
 /// why the figure was not rendered (empty when it was).
 std::string writeFigureFiles(const ReportRun& run, const Artefact& a,
                              const std::filesystem::path& dir, std::string& renderNote) {
-  const std::string& id = a.id;
-  std::string body;
   // The script, rendered when gnuplot is there.
-  if (!a.gnuplot.empty()) {
-    writeAtomically(dir / (id + ".gp"), a.gnuplot);
-    if (run.render) {
-      const std::string problem = renderGnuplot(dir, id);
-      if (!problem.empty()) {
-        run.outcome.errors.push_back(id + ": " + problem);
-        renderNote = "**Not rendered**: " + problem + ".";
-      }
-    } else {
-      renderNote = "*Not rendered (gnuplot is not on PATH)*; script: [" + id + ".gp](" + id + "/" +
-                   id + ".gp).";
-    }
-    if (renderNote.empty() || std::filesystem::exists(dir / (id + ".png")))
-      body += "![" + id + "](" + id + "/" + id + ".png)\n\n";
-    if (!renderNote.empty()) body += renderNote + "\n\n";
-  }
+  std::string body = writeGnuplotFiles(run, a, dir, renderNote);
   // The application's own pictures, what it shows, and the data tables.
   body += applicationRunImages(run, a, dir);
   body += paragraph(a.sentences) + "\n\n";
@@ -2123,7 +2668,8 @@ std::string filesLine(const Artefact& a, const std::filesystem::path& dir) {
   if (!a.figure) {
     files.push_back("[Markdown](" + id + "/" + id + ".md)");
     files.push_back("[LaTeX](" + id + "/" + id + ".tex)");
-  } else if (!a.gnuplot.empty()) {
+  }
+  if (!a.gnuplot.empty()) {
     files.push_back("[gnuplot](" + id + "/" + id + ".gp)");
     if (std::filesystem::exists(dir / (id + ".pdf")))
       files.push_back("[PDF](" + id + "/" + id + ".pdf)");
@@ -2155,6 +2701,20 @@ Section missingSection(const ReportRun& run, const std::string& id,
   return section;
 }
 
+/// Counts the successful runs that attempted the topology certificate (some cells certified or
+/// not) and those that certified every cell.
+void countCertified(const CsvTable& csv, Section& section) {
+  if (!csv.hasColumn("topology.certified_cells") || !csv.hasColumn("topology.uncertified_cells"))
+    return;
+  for (std::size_t r : okRows(csv)) {
+    const double certified = csv.number(r, "topology.certified_cells"),
+                 uncertified = csv.number(r, "topology.uncertified_cells");
+    if (!(certified + uncertified > 0)) continue;
+    ++section.withCertificate;
+    section.certified += uncertified == 0;
+  }
+}
+
 /// Builds one artefact from its CSV and writes its files; returns its section. Throws what
 /// reading, building or writing throws.
 Section artefactSection(const ReportRun& run, const std::string& id,
@@ -2166,11 +2726,14 @@ Section artefactSection(const ReportRun& run, const std::string& id,
   section.id = id;
   section.runs = a.runs;
   section.failed = a.failures.size();
+  section.conclusion = a.conclusion;
+  countCertified(csv, section);
   run.outcome.failedRuns += a.failures.size();
   // Its files: the sentences for the paper, then the table or figure.
   writeAtomically(dir / (id + "-summary.tex"), sentencesLatex(a.sentences));
   std::string renderNote;
-  std::string body = a.figure ? writeFigureFiles(run, a, dir, renderNote) : writeTableFiles(a, dir);
+  std::string body = a.figure ? writeFigureFiles(run, a, dir, renderNote)
+                              : writeTableFiles(run, a, dir, renderNote);
   // The runs, failures and file links.
   body += runsLine(a);
   if (!a.failures.empty()) {
@@ -2243,6 +2806,36 @@ std::string reportMarkdown(const ReportSettings& settings, const std::vector<Sec
   return report;
 }
 
+/// The conclusion computed from the results: runs, failed and certified runs over all
+/// experiments, the application figures, then each artefact's conclusion in report order.
+std::vector<std::string> conclusionSentences(const std::vector<Section>& sections) {
+  std::size_t runs = 0, failed = 0, certified = 0, withCertificate = 0, applications = 0,
+              artefacts = 0;
+  for (const Section& s : sections) {
+    if (s.status == "missing" || s.status == "error") continue;
+    ++artefacts;
+    runs += s.runs, failed += s.failed;
+    certified += s.certified, withCertificate += s.withCertificate;
+    applications += s.id.starts_with("fig-app-") ? s.runs - s.failed : 0;
+  }
+  std::vector<std::string> sentences = {
+      "We ran " + std::to_string(runs) + (runs == 1 ? " run in " : " runs in ") +
+      std::to_string(artefacts) + (artefacts == 1 ? " experiment" : " experiments") +
+      ", of which " + std::to_string(failed) + " failed" +
+      (withCertificate
+           ? "; " + std::to_string(certified) + " of " + std::to_string(withCertificate) +
+                 " runs that attempted the topology certificate certified every "
+                 "cell"
+           : "") +
+      (applications ? "; " + std::to_string(applications) +
+                          " application runs contour the paper's Sec. 3 problems"
+                    : "") +
+      "."};
+  for (const Section& s : sections)
+    sentences.insert(sentences.end(), s.conclusion.begin(), s.conclusion.end());
+  return sentences;
+}
+
 /// results/applications.tex: one figure per application for the paper (it cannot know the
 /// application ids in advance); paper/ndcontour.tex defines \artefactfigure.
 std::string applicationsLatex(const ReportOutcome& outcome) {
@@ -2274,7 +2867,13 @@ ReportOutcome writeReport(const ReportSettings& settings, std::ostream& log) {
   // Every artefact, then the report and the applications' figure list.
   std::vector<Section> sections;
   for (const std::string& id : artefactIds(settings)) sections.push_back(reportSection(run, id));
-  writeAtomically(settings.results / "report.md", reportMarkdown(settings, sections, outcome));
+  const std::vector<std::string> conclusion = conclusionSentences(sections);
+  writeAtomically(settings.results / "report.md", reportMarkdown(settings, sections, outcome) +
+                                                      "## Conclusion\n\n" + paragraph(conclusion) +
+                                                      "\n");
+  writeAtomically(settings.results / "conclusion.tex",
+                  "% Generated by `ndcontour report` from the results: do not edit.\n" +
+                      sentencesLatex(conclusion));
   writeAtomically(settings.results / "applications.tex", applicationsLatex(outcome));
   log << "report: wrote " << (settings.results / "report.md").string() << "\n";
 

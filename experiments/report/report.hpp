@@ -166,6 +166,18 @@ class GnuplotScript {
   std::string commands_;
 };
 
+/// Segments (pairs of vertex indices; other simplices are skipped) chained into polylines of
+/// vertex indices: open chains from their ends (and branch points) first, then closed loops,
+/// which repeat their first vertex at the end.
+std::vector<std::vector<int>> chainSegments(const std::vector<std::vector<int>>& segments);
+
+/// Rows for GnuplotScript::data of polylines (vertex indices into `points`) for
+/// `splot ... with lines`: two blank lines after each polyline, so that each is its own data
+/// set (one blank line makes splot join blocks of equal length as a grid, drawing zigzags and
+/// chords between separate polylines).
+std::vector<std::vector<double>> polylineRows(const std::vector<std::vector<int>>& lines,
+                                              const std::vector<std::array<double, 3>>& points);
+
 /// Whether `gnuplot` is on PATH.
 bool gnuplotAvailable();
 
@@ -194,6 +206,8 @@ struct Artefact {
   std::size_t runs = 0;                ///< rows of the CSV
   std::vector<std::string> failures;   ///< one line per failed run: run, problem, status, error
   std::vector<std::string> shownRuns;  ///< figures: the runs (`runs/<run>/`) the figure shows
+  /// What the paper's conclusion takes from this artefact (computed from the data; may be empty).
+  std::vector<std::string> conclusion;
 };
 
 /// The directory of the paper's reference figures (`table1.toml`, ...) for the configs
@@ -234,7 +248,10 @@ struct ReportOutcome {
   int status = 0;
 };
 
-/// Writes every artefact whose CSV exists under `settings.results` and `results/report.md`,
+/// Writes every artefact whose CSV exists under `settings.results`, `results/report.md` (which
+/// ends with the conclusion) and `results/conclusion.tex`, the paper's conclusion computed from
+/// the results: runs, failed and certified runs over all experiments, then each artefact's
+/// Artefact::conclusion in report order,
 /// each file atomically (a failed artefact leaves its previous files alone). Progress lines go
 /// to `log`. Throws InputError when `settings.results` is not a directory.
 ReportOutcome writeReport(const ReportSettings& settings, std::ostream& log);
