@@ -20,6 +20,7 @@
 
 #include <toml++/toml.h>
 
+#include "experiments/view/view.hpp"
 #include "framework/core/problem.hpp"
 #include "framework/core/toml_reader.hpp"
 
@@ -2740,6 +2741,7 @@ Section artefactSection(const ReportRun& run, const std::string& id,
     body += " Failed runs:\n\n";
     for (const std::string& f : a.failures) body += "- " + f + "\n";
   }
+  body += ndc::view::writeRunViewers(dir / "runs", id + "/runs/");  // a page per run with a mesh
   body += "\n" + filesLine(a, dir);
   section.status = !renderNote.empty() && run.render ? "not rendered"
                    : a.failures.empty()              ? "ok"

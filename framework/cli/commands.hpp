@@ -40,4 +40,17 @@ void addBenchOptions(CLI::App& bench, BenchOptions& options);
 /// time of each stage as a Markdown table row. Returns the exit status.
 int runBench(BenchOptions options);
 
+/// Options of `ndcontour view` (docs/viewer.md).
+struct ViewOptions {
+  std::string resultDir;  ///< RESULT_DIR: the `--out` folder of `ndcontour solve`
+  std::string out;        ///< `--out FILE`; empty: `RESULT_DIR/view.html`
+};
+
+/// Declares the arguments of the `view` subcommand.
+void addViewOptions(CLI::App& view, ViewOptions& options);
+
+/// `ndcontour view`: writes the viewer page of a result folder (ndc::view::writeViewer) and
+/// prints one line saying where and what it shows. Bad input throws ndc::InputError (status 2).
+int runView(const ViewOptions& options);
+
 }  // namespace ndc::cli

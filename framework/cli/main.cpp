@@ -55,6 +55,10 @@ int run(int argc, char** argv) {
   CLI::App* report = app.add_subcommand("report", "Write the tables, figures and report.md");
   ndc::cli::addReportOptions(*report, reportOptions);
 
+  ndc::cli::ViewOptions viewOptions;
+  CLI::App* view = app.add_subcommand("view", "Write an HTML page that shows a result's mesh");
+  ndc::cli::addViewOptions(*view, viewOptions);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -66,15 +70,16 @@ int run(int argc, char** argv) {
       message = "unknown option '" + extra.front() + "'";
     else if (app.get_subcommands().empty() && !extra.empty())
       message = "unknown subcommand '" + extra.front() +
-                "' (accepted: info, solve, bench, experiment, report)";
+                "' (accepted: info, solve, bench, experiment, report, view)";
     else if (app.get_subcommands().empty())
-      message = "a subcommand is required (accepted: info, solve, bench, experiment, report)";
+      message = "a subcommand is required (accepted: info, solve, bench, experiment, report, view)";
     std::cerr << "ndcontour: " << oneLine(message) << " (see ndcontour --help)\n";
     return kExitBadInput;
   }
 
   if (bench->parsed()) return ndc::cli::runBench(benchOptions);
   if (report->parsed()) return ndc::cli::runReport(reportOptions);
+  if (view->parsed()) return ndc::cli::runView(viewOptions);
   if (task->parsed()) return ndc::cli::runExperimentTaskCommand(taskOptions);
   if (experiment->parsed()) {
     std::string commandLine = "ndcontour";
