@@ -103,7 +103,7 @@ std::set<std::string> readmeOptions(const std::string& sub) {
 }  // namespace
 
 TEST_CASE("cli: the README's usage lines name exactly the options of --help", "[cli]") {
-  for (const std::string sub : {"solve", "experiment", "report"}) {
+  for (const std::string sub : {"solve", "experiment", "report", "view"}) {
     INFO("ndcontour " << sub);
     const Run help = ndcontour(sub + " --help");
     REQUIRE(help.status == 0);
