@@ -108,7 +108,7 @@ TEST_CASE("cli: the README's usage lines name exactly the options of --help", "[
     const Run help = ndcontour(sub + " --help");
     REQUIRE(help.status == 0);
     const std::set<std::string> listed = helpOptions(help.out);
-    CHECK(listed.size() >= 2);
+    CHECK(!listed.empty());  // the parser found the options (view has one: --out)
     CHECK(readmeOptions(sub) == listed);
   }
 }
