@@ -587,7 +587,9 @@ TEST_CASE("linearized bounding is much tighter on the circle in R^6", "[subdivis
 
 TEST_CASE("linearized test never discards a box around a point of the manifold", "[subdivision]") {
   // Boxes of widths from 1 down to 1e-13 around sampled points of the circles in R^6 and R^8,
-  // with the point at the centre, at a corner and on a face: rounding must not discard them.
+  // with the point at the centre, at a corner and on a face: rounding must not discard them,
+  // neither the simultaneous test nor (R^8: the sphere has 3^8 coefficients, no patch) the
+  // mean-value test of an equation without a Bernstein patch.
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> unit(0, 1);
   for (const Manifold& m : {circle3(), circle6(), circle8()}) {
@@ -609,7 +611,7 @@ TEST_CASE("linearized test never discards a box around a point of the manifold",
             if (box.lo[j] > p[j]) box.lo[j] = p[j];
           }
           ++boxes;
-          excluded += bounding.linearizationExcludes(box);
+          excluded += bounding.linearizationExcludes(box) || bounding.meanValueExcludes(box);
         }
       }
       INFO(boxes << " boxes");
@@ -622,6 +624,15 @@ TEST_CASE("linearized test never discards a box around a point of the manifold",
         off.hi[j] = off.lo[j] + 2e-3;
       }
       CHECK(bounding.linearizationExcludes(off));
+      // Which equations have a patch: the sphere only up to R^6, the hyperplanes always.
+      for (const ndc::Expression& e : m.problem.equations) {
+        const bool affine = e.tape().totalDegree(2) <= 1;
+        CHECK(ndc::LinearizedBounding<double>::hasPatch(e) == (affine || n <= 6));
+      }
+      // The mean-value test discards a box where only the sphere excludes 0: the unit sphere
+      // is far from a small box at 0.
+      ndc::Box<double> centre{std::vector<double>(n, -1e-3), std::vector<double>(n, 1e-3)};
+      CHECK(bounding.meanValueExcludes(centre) == (n > 6));
     }
   }
 }

@@ -127,9 +127,40 @@ bool IntervalBounding<S>::mayContainZero(const State& state) const {
 
 // --- LinearizedBounding --------------------------------------------------------------------------
 
+namespace {
+
+/// Index of (row, col) in a row-major matrix with `cols` columns.
+inline std::size_t at(int row, int col, int cols) {
+  return static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) +
+         static_cast<std::size_t>(col);
+}
+
+}  // namespace
+
+template <class S>
+bool LinearizedBounding<S>::hasPatch(const Expression& equation) {
+  // Above total degree 2 the mean-value form loses too much against the hull; at most 2 it
+  // is as tight up to O(h^2) (exact for an affine F_i), and cheaper once the dense form is large.
+  if (equation.tape().totalDegree(3) > 2) return true;
+  double coefficients = 1;
+  for (int d : equation.degrees()) coefficients *= d + 1;
+  return coefficients <= kMaxDensePatch;
+}
+
+template <class S>
+Problem LinearizedBounding<S>::patchedEquations(const Problem& problem) {
+  Problem patched = problem;
+  patched.equations.clear();
+  for (const Expression& e : problem.equations)
+    if (hasPatch(e)) patched.equations.push_back(e);
+  return patched;
+}
+
 template <class S>
 LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& domain)
-    : bernstein_(problem, domain), n_(problem.n()), m_(static_cast<int>(problem.equations.size())) {
+    : bernstein_(patchedEquations(problem), domain),
+      n_(problem.n()),
+      m_(static_cast<int>(problem.equations.size())) {
   const auto n = static_cast<std::size_t>(n_), m = static_cast<std::size_t>(m_);
   const auto k = n >= m ? n - m : 0;
   // Enabled when the equations are coupled: for equations in disjoint variables a box holds a
@@ -172,7 +203,10 @@ LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& 
   affineRad_.assign(m * n, S(0));
   std::vector<Interval<S>> box(n), gradient(n);
   for (std::size_t j = 0; j < n; ++j) box[j] = Interval<S>(domain.lo[j], domain.hi[j]);
+  evaluated_.assign(m, 0);
   for (std::size_t i = 0; i < m; ++i) {
+    evaluated_[i] = !hasPatch(problem.equations[i]);
+    anyEvaluated_ = anyEvaluated_ || evaluated_[i];
     if (problem.equations[i].tape().totalDegree(2) > 1) continue;
     affine_[i] = 1;
     problem.equations[i].evaluate<S>(std::span<const Interval<S>>(box),
@@ -190,18 +224,36 @@ template <class S>
 bool LinearizedBounding<S>::mayContainZero(const State& state) const {
   // The per-equation hulls first: cheap, and they discard most boxes far from every F_i = 0.
   if (!bernstein_.mayContainZero(state)) return false;
-  return !enabled_ || !linearizationExcludes(state.box);
+  if (!anyEvaluated_) return !enabled_ || !linearizationExcludes(state.box);
+  // Equations without a patch: their mean-value forms, then the simultaneous test on the same
+  // linearisation.
+  const S hh = centreAndHalfWidths(state.box);
+  if (!linearise()) return true;
+  if (meanValueExcludes()) return false;
+  return !enabled_ || !linearisedSystemExcludes(hh);
 }
 
-namespace {
-
-/// Index of (row, col) in a row-major matrix with `cols` columns.
-inline std::size_t at(int row, int col, int cols) {
-  return static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) +
-         static_cast<std::size_t>(col);
+template <class S>
+bool LinearizedBounding<S>::meanValueExcludes(const Box<S>& box) const {
+  if (!anyEvaluated_) return false;
+  centreAndHalfWidths(box);
+  return linearise() && meanValueExcludes();
 }
 
-}  // namespace
+template <class S>
+bool LinearizedBounding<S>::meanValueExcludes() const {
+  // F_i(x) = F_i(c) + J_i(xi) (x - c) with J_i(xi) in jac_i +- rad, so F_i(X) lies in
+  // mu_i +- (rho_i + sum_j |jac_ij| h_j): the range itself for an affine F_i.
+  using std::abs;
+  const S up = S(1) + tol_;
+  for (int i = 0; i < m_; ++i) {
+    if (!evaluated_[i]) continue;
+    S reach = 0;
+    for (int j = 0; j < n_; ++j) reach += abs(jac_[at(i, j, n_)]) * h_[j];
+    if (abs(mu_[i]) > (rho_[i] + reach * up) * up) return true;
+  }
+  return false;
+}
 
 template <class S>
 bool LinearizedBounding<S>::linearizationExcludes(const Box<S>& box) const {
@@ -209,8 +261,13 @@ bool LinearizedBounding<S>::linearizationExcludes(const Box<S>& box) const {
   // The steps of the class comment; a step that cannot conclude keeps the box.
   const S hh = centreAndHalfWidths(box);  // 1
   if (!linearise()) return false;         // 2: an enclosure that is not finite
-  if (!factorTranspose()) return false;   // 3: J_c (nearly) rank-deficient
-  invertLowerFactor();                    // 4
+  return linearisedSystemExcludes(hh);
+}
+
+template <class S>
+bool LinearizedBounding<S>::linearisedSystemExcludes(const S& hh) const {
+  if (!factorTranspose()) return false;  // 3: J_c (nearly) rank-deficient
+  invertLowerFactor();                   // 4
   S migSq = 0;
   if (rowTestExcludes(migSq)) return true;       // 5
   if (ballTestExcludes(migSq, hh)) return true;  // 6
@@ -512,8 +569,9 @@ Registry<BoundingFactory>& boundingRegistry() {
          {}},
         boundingFactory<IntervalBounding>()},
        {{"linearized",
-         "The Bernstein hull, then a linearization of all equations together that discards "
-         "boxes no single equation can (docs/subdivision.md).",
+         "The Bernstein hull (the mean-value form for a quadratic whose dense form is large), "
+         "then a linearization of all equations together that discards boxes no single "
+         "equation can (docs/subdivision.md).",
          {}},
         boundingFactory<LinearizedBounding>()}});
   return registry;

@@ -92,11 +92,21 @@ class IntervalBounding final {
   mutable std::vector<Interval<S>> x_, mid_, gradient_;
 };
 
-/// Linearised bounding (`linearized`): the Bernstein hull test of every F_i on its own, then,
+/// Linearised bounding (`linearized`): a per-equation test of every F_i on its own, then,
 /// for boxes that pass it and when m >= 2, a test of the m equations *together* on their
 /// linearisation. In codimension m >= 2 the per-equation tests keep every box that meets each
 /// hypersurface F_i = 0 separately, i.e. a neighbourhood of their pairwise intersections far
 /// from M; the simultaneous test removes most of these.
+///
+/// Per-equation test. An equation is subdivided in Bernstein form and tested by its hull, as in
+/// `bernstein`, unless its total degree is at most 2 and its dense form has more than
+/// kMaxDensePatch coefficients (the product of (degree + 1) over the variables). Such an
+/// equation is enclosed by its mean-value form F_i(c) + J_i(X) (X - c) instead, from the same
+/// midpoint-radius evaluation the simultaneous test uses: for total degree <= 2 it is as tight
+/// as the hull up to O(h^2) (the exact range for an affine F_i), while the dense form is
+/// exponential in n where the tape is not (a sphere in R^8 has 3^8 = 6561 coefficients, whose
+/// halving and scan per box cost more than the whole linearised test). Above degree 2 the hull
+/// is kept in any dimension: the mean-value form of a high-degree F_i is far looser.
 ///
 /// Derivation. Let X be the box, c its centre, h_j >= |x_j - c_j| on X, J(X) an interval
 /// enclosure of the Jacobian over X (midpoint-radius gradients of the equations' tapes; constant
@@ -153,8 +163,27 @@ class LinearizedBounding final {
   /// The simultaneous test alone (for tests): true when the linearised system proves that
   /// `box` holds no common zero.
   bool linearizationExcludes(const Box<S>& box) const;
+  /// The mean-value test of the equations without a patch alone (for tests): true when one of
+  /// them proves that `box` holds no zero of it.
+  bool meanValueExcludes(const Box<S>& box) const;
+
+  /// Largest dense Bernstein form (coefficients, the product of (degree + 1) over the
+  /// variables) an equation of total degree <= 2 is subdivided in; a larger one is enclosed by
+  /// its mean-value form instead (see the class comment). 1024 keeps every quadratic up to
+  /// n = 6 (3^6 = 729) and every affine equation up to n = 10 in Bernstein form.
+  static constexpr double kMaxDensePatch = 1024;
+  /// True when `equation` is subdivided in Bernstein form (total degree above 2, or at most
+  /// kMaxDensePatch coefficients).
+  static bool hasPatch(const Expression& equation);
 
  private:
+  /// `problem` with only the equations that have a patch.
+  static Problem patchedEquations(const Problem& problem);
+  /// The mean-value test of each equation without a patch, after steps 1 and 2; true when one
+  /// excludes 0.
+  bool meanValueExcludes() const;
+  /// Steps 3 to 7 after steps 1 and 2 (`hh` from step 1); true when the box is discarded.
+  bool linearisedSystemExcludes(const S& hh) const;
   // The steps of linearizationExcludes (numbered as in the class comment), on the scratch
   // buffers below.
   /// 1: centre c_ and half-widths h_ of `box`; returns |h|_2^2 (rounded up).
@@ -186,7 +215,9 @@ class LinearizedBounding final {
   const S& nul(int row, int col) const { return q1(row, m_ + col); }
   BernsteinBounding<S> bernstein_;
   std::vector<MidRadEvaluator<S>> evaluators_;  // per equation
-  std::vector<char> affine_;  // per equation: total degree <= 1, so the gradient is constant
+  std::vector<char> affine_;     // per equation: total degree <= 1, so the gradient is constant
+  std::vector<char> evaluated_;  // per equation: no patch, enclosed by its mean-value form
+  bool anyEvaluated_ = false;
   int n_ = 0, m_ = 0;
   bool enabled_ = false;  // some pair of equations shares a variable, and m <= n
   S tol_;                 // relative margin covering every rounding of the test
