@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -22,6 +23,7 @@
 #include <map>
 #include <numeric>
 #include <optional>
+#include <random>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -30,6 +32,7 @@
 #include "framework/applications/load.hpp"
 #include "framework/core/problem.hpp"
 #include "framework/pipeline/pipeline.hpp"
+#include "strategies/connection/leaf_model.hpp"
 #include "tests/test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -201,6 +204,83 @@ long graphComponents(const std::vector<std::pair<std::int32_t, std::int32_t>>& e
 // --- Closed curves (k = 1) in R^2 .. R^6 -------------------------------------------------------
 
 //! [crossing-curves]
+TEMPLATE_TEST_CASE("crossing: a leaf's affine model never excludes a face through a zero",
+                   "[crossing]", NDC_SCALARS) {
+  // Generated systems with an exact common zero p: p has coordinates k / 64, the sphere
+  // |x|^2 - |p|^2 and n - 3 hyperplanes a.(x - p) with small integer a (every literal exact).
+  // Leaves of random widths hold p on one of their faces of dimension n - 2; the model of the
+  // leaf must not exclude that face, and it must exclude the faces of a leaf far from the
+  // sphere.
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  std::mt19937 rng(23);
+  std::uniform_int_distribution<int> grid(-64, 64), coefficient(-3, 3);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int faces = 0;
+  for (int n = 3; n <= 8; ++n) {
+    for (int system = 0; system < 6; ++system) {
+      std::vector<std::string> names;
+      for (int j = 0; j < n; ++j) names.push_back("x" + std::to_string(j));
+      std::vector<double> p(n);
+      double radius2 = 0;
+      for (int j = 0; j < n; ++j) {
+        p[j] = grid(rng) / 64.0;
+        radius2 += p[j] * p[j];
+      }
+      std::ostringstream sphere;
+      sphere.precision(17);
+      for (int j = 0; j < n; ++j) sphere << (j ? " + " : "") << names[j] << "^2";
+      sphere << " - " << radius2;
+      std::vector<ndc::Expression> equations{ndc::Expression::parse(sphere.str(), names)};
+      for (int i = 0; i < n - 3; ++i) {
+        std::ostringstream plane;
+        plane.precision(17);
+        double offset = 0;
+        for (int j = 0; j < n; ++j) {
+          const int a = coefficient(rng);
+          plane << (j ? " + " : "") << a << "*" << names[j];
+          offset += a * p[j];
+        }
+        plane << " - (" << offset << ")";
+        equations.push_back(ndc::Expression::parse(plane.str(), names));
+      }
+      std::vector<ndc::MidRadEvaluator<S>> evaluators;
+      for (const ndc::Expression& e : equations) evaluators.emplace_back(e.sharedTape());
+      const std::vector<S> level(equations.size(), S(0));
+      ndc::LeafModel<S> model;
+      for (int trial = 0; trial < 40; ++trial) {
+        // Two fixed axes and their ends; p on that face, elsewhere inside the leaf.
+        const int a0 = static_cast<int>(rng() % n);
+        const int a1 = (a0 + 1 + static_cast<int>(rng() % (n - 1))) % n;
+        const int side = static_cast<int>(rng() % 4);
+        const double width = std::pow(10.0, -6 * unit(rng));
+        ndc::Box<S> box{std::vector<S>(n), std::vector<S>(n)};
+        for (int j = 0; j < n; ++j) {
+          const int t = j == a0 ? 0 : j == a1 ? 1 : -1;
+          const double below = t < 0 ? unit(rng) * width : ((side >> t) & 1 ? width : 0);
+          box.lo[j] = S(p[j]) - S(below);
+          box.hi[j] = box.lo[j] + S(width);
+          if (t >= 0) ((side >> t) & 1 ? box.hi[j] : box.lo[j]) = S(p[j]);
+          if (box.lo[j] > S(p[j])) box.lo[j] = S(p[j]);
+          if (box.hi[j] < S(p[j])) box.hi[j] = S(p[j]);
+        }
+        ndc::buildLeafModel(evaluators, box, std::span<const S>(level), model);
+        const std::array<int, 2> axes{a0, a1};
+        INFO("n = " << n << ", system " << system << ", trial " << trial);
+        CHECK_FALSE(ndc::faceExcluded(model, box, std::span<const int>(axes), side));
+        ++faces;
+      }
+      // A leaf far outside the sphere: every face excluded.
+      ndc::Box<S> far{std::vector<S>(n, S(3)), std::vector<S>(n, S(3.25))};
+      ndc::buildLeafModel(evaluators, far, std::span<const S>(level), model);
+      const std::array<int, 2> axes{0, 1};
+      for (int side = 0; side < 4; ++side)
+        CHECK(ndc::faceExcluded(model, far, std::span<const int>(axes), side));
+    }
+  }
+  CHECK(faces == 6 * 6 * 40);
+}
+
 TEMPLATE_TEST_CASE("crossing: closed curves in R^2..R^6", "[crossing]", NDC_SCALARS) {
   checkCases<TestType>({
       {"circle (R^2)", example("circle"), 5, 1, 0},

@@ -24,6 +24,7 @@
 #include "framework/core/parallel.hpp"
 #include "strategies/connection/cell_tree.hpp"
 #include "strategies/connection/certificate.hpp"
+#include "strategies/connection/leaf_model.hpp"
 
 namespace ndc {
 namespace {
@@ -905,6 +906,13 @@ class AdaptiveCrossing {
       if (k_ == 1) fixedAxes_.push_back({a, -1});
       for (int b = a + 1; k_ == 2 && b < n_; ++b) fixedAxes_.push_back({a, b});
     }
+    // Evaluation first only for programs of arithmetic operations: a program with a
+    // tensor-product patch as a leaf (the applications' surfaces) encloses it by de Casteljau
+    // on every run, as dear as the Bernstein path, and for nearly degenerate rational patches
+    // (weights of 1e-300) so loosely that nothing is decided and every face pays twice.
+    byEvaluation_ = true;
+    for (const Expression& e : in.system.equations())
+      byEvaluation_ = byEvaluation_ && e.tape().leaves().empty();
     setBudget(in.cells.size(), in.tolerance > 0);
   }
 
@@ -1085,7 +1093,8 @@ class AdaptiveCrossing {
   /// use) with the margins `margins`.
   template <class Patches>
   FaceResult<S> solveFace(std::int32_t leaf, const std::array<int, 2>& axes, int side,
-                          Patches&& patches, std::span<const S> margins) const {
+                          Patches&& patches, std::span<const S> margins,
+                          const LeafModel<S>* model = nullptr) const {
     const Box<S> box = leafBox(leaf);
     const auto ci = tree_.index(leaf);
     const std::int64_t top = tree_.grid(tree_.level(leaf)).cellsPerAxis();
@@ -1106,9 +1115,13 @@ class AdaptiveCrossing {
       point[axes[t]] = upper ? box.hi[axes[t]] : box.lo[axes[t]];
     }
     std::vector<std::vector<S>> roots;
-    FaceSolver<S> solver(in_.system, maxFaceDepth_, level_, position_.slack);
     FaceResult<S> r;
-    if (m_ > 1 && solver.solveByEvaluation(point, freeAxes, faceBox, ends, roots)) {
+    // The leaf's affine model first: it excludes most faces without an evaluation on them.
+    if (model && faceExcluded(*model, box, std::span<const int>(axes.data(), k_), side))
+      return faceOutcome(std::move(r), roots, box, freeAxes, ends);
+    FaceSolver<S> solver(in_.system, maxFaceDepth_, level_, position_.slack);
+    if (m_ > 1 && byEvaluation_ &&
+        solver.solveByEvaluation(point, freeAxes, faceBox, ends, roots)) {
       r.certain = r.proven = true;
     } else {
       roots.clear();
@@ -1333,6 +1346,10 @@ class AdaptiveCrossing {
     if (empty_[c] < 0) prepare();
     if ((empty_[c] < 0 ? out.empty : empty_[c]) == 1) return;
     out.owned = ownedFaces(c);
+    // For m >= 2 (where faces are solved by evaluation) the leaf's affine model, built on the
+    // first face not solved yet.
+    LeafModel<S> model;
+    bool modelled = false;
     for (const OwnedFace& f : out.owned) {
       const std::uint64_t key = faceKey(c, f.a, f.side);
       if (faces_.count(key)) continue;
@@ -1340,7 +1357,12 @@ class AdaptiveCrossing {
         prepare();
         return patches;
       };
-      out.faces.emplace_back(key, solveFace(c, fixedAxes_[f.a], f.side, restricted, rf.margins));
+      if (m_ > 1 && byEvaluation_ && !modelled) {
+        buildLeafModel(threadEvaluators(in_.system), leafBox(c), std::span<const S>(level_), model);
+        modelled = true;
+      }
+      out.faces.emplace_back(key, solveFace(c, fixedAxes_[f.a], f.side, restricted, rf.margins,
+                                            modelled ? &model : nullptr));
     }
   }
 
@@ -1504,7 +1526,7 @@ class AdaptiveCrossing {
     if (graph_[leaf] < 0) {
       // By evaluation first (polynomial in n); the Bernstein hulls where it does not prove it.
       bool excluded = false;
-      graph_[leaf] = evaluatedGraph(leafBox(leaf), -1, excluded, t);
+      graph_[leaf] = byEvaluation_ && evaluatedGraph(leafBox(leaf), -1, excluded, t);
       if (!graph_[leaf]) {
         prepare(leaf, rf, t);
         graph_[leaf] = graphOf(t.patches, rf.margins, t.jacobian, t.test);
@@ -1579,7 +1601,7 @@ class AdaptiveCrossing {
           Box<S> face = box;
           face.lo[a] = face.hi[a] = side == 1 ? box.hi[a] : box.lo[a];
           bool excluded = false;
-          if (evaluatedGraph(face, a, excluded, t)) continue;
+          if (byEvaluation_ && evaluatedGraph(face, a, excluded, t)) continue;
           prepare(leaf, rf, t);
           if (!faceGraphOf(t.patches, rf.margins, a, side == 1, freeAxes(a), t.jacobian, t.test))
             failed = 2 * a + side;
@@ -2486,6 +2508,7 @@ class AdaptiveCrossing {
   CellTree tree_;
   std::vector<std::array<int, 2>> fixedAxes_;  ///< the k fixed axes of each kind of m-face
   std::vector<S> level_;                       ///< c of the current attempt
+  bool byEvaluation_ = true;  ///< faces and graph tests by evaluation first (no patch leaves)
   std::unordered_map<const std::vector<Bernstein<S>>*, RootForms> rootForms_;
   std::vector<Bernstein<S>> patches_;  ///< the current leaf's patches
   std::vector<S> margins_;
