@@ -19,6 +19,7 @@
 #include "framework/core/errors.hpp"
 #include "framework/core/io.hpp"
 #include "framework/core/json.hpp"
+#include "framework/core/problem.hpp"
 
 namespace ndc::view {
 namespace {
@@ -43,14 +44,6 @@ struct PageMesh {
   std::vector<float> cells;  ///< the centres of the uncertified cells, n coordinates each
 };
 
-std::string readText(const fs::path& file, const std::string& what) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string() + ": " + what);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 /// An integer field of the flattened summary; throws when it is absent or not an integer.
 int summaryInt(const std::vector<std::pair<std::string, std::string>>& fields,
                const std::string& key, const fs::path& file) {
@@ -71,7 +64,7 @@ Summary readSummary(const fs::path& file) {
   if (!fs::is_regular_file(file))
     throw InputError(file.string() + ": missing (not a finished run of ndcontour solve --out)");
   Summary s;
-  s.text = readText(file, "cannot read the file");
+  s.text = readInputFile(file, "summary");
   std::vector<std::pair<std::string, std::string>> fields;
   try {
     fields = flattenJsonNumbers(s.text);
