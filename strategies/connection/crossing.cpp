@@ -122,19 +122,6 @@ bool encloseSystem(std::vector<MidRadEvaluator<S>>& evaluators, std::span<const 
   return true;
 }
 
-/// Centre and radii (rounded up, so that centre +- radius holds the box) of `box`.
-template <class S>
-void centreAndRadius(const Box<S>& box, std::vector<S>& centre, std::vector<S>& radius) {
-  const int n = box.dim();
-  const S up = S(1) + S(8) * ScalarTraits<S>::epsilon();
-  centre.resize(n);
-  radius.resize(n);
-  for (int j = 0; j < n; ++j) {
-    centre[j] = (box.lo[j] + box.hi[j]) / 2;
-    radius[j] = std::max<S>(box.hi[j] - centre[j], centre[j] - box.lo[j]) * up;
-  }
-}
-
 /// Finds the crossings of the level set F = c with one m-face: the roots of the m constraints
 /// minus the level c (docs/crossing.md, "General position"), restricted to the face, a square
 /// system in the face's m free variables. For m = 1 the level is 0 and the sign rule decides.
@@ -317,12 +304,7 @@ class FaceSolver {
 
   /// krawczykAround with the midpoint-radius enclosures of enclose().
   Krawczyk evaluatedAround(const std::vector<S>& root, const Box<S>& face) {
-    Box<S> box{root, root};
-    for (int j = 0; j < m_; ++j) {
-      const S w = face.hi[j] - face.lo[j];
-      box.lo[j] -= w;
-      box.hi[j] += w;
-    }
+    const Box<S> box = aroundRoot(root, face);
     bool excluded = false;
     if (!enclose(box, false, excluded)) return Krawczyk::kUnknown;
     return krawczyk(box, &fy_);
@@ -584,16 +566,22 @@ class FaceSolver {
     return !f.containsZero();
   }
 
-  /// Krawczyk on the box `root +- width` around a Newton root, with J(X) from the interval
-  /// gradient; it contains the whole current face when `width` is the face's width, so
-  /// kUnique proves the root is the face's only one even when it lies near the face boundary.
-  Krawczyk krawczykAround(const std::vector<S>& root, const Box<S>& face) {
+  /// The box `root +- width` (the face's width per free axis) around a Newton root.
+  Box<S> aroundRoot(const std::vector<S>& root, const Box<S>& face) const {
     Box<S> box{root, root};
     for (int j = 0; j < m_; ++j) {
       const S w = face.hi[j] - face.lo[j];
       box.lo[j] -= w;
       box.hi[j] += w;
     }
+    return box;
+  }
+
+  /// Krawczyk on the box `root +- width` around a Newton root, with J(X) from the interval
+  /// gradient; it contains the whole current face when `width` is the face's width, so
+  /// kUnique proves the root is the face's only one even when it lies near the face boundary.
+  Krawczyk krawczykAround(const std::vector<S>& root, const Box<S>& face) {
+    const Box<S> box = aroundRoot(root, face);
     intervalJacobian(box);
     return krawczyk(box);
   }

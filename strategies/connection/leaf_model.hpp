@@ -16,6 +16,19 @@
 
 namespace ndc {
 
+/// Centre and radii (rounded up, so that centre +- radius holds the box) of `box`.
+template <class S>
+void centreAndRadius(const Box<S>& box, std::vector<S>& centre, std::vector<S>& radius) {
+  const int n = box.dim();
+  const S up = S(1) + S(8) * ScalarTraits<S>::epsilon();
+  centre.resize(n);
+  radius.resize(n);
+  for (int j = 0; j < n; ++j) {
+    centre[j] = (box.lo[j] + box.hi[j]) / 2;
+    radius[j] = std::max<S>(box.hi[j] - centre[j], centre[j] - box.lo[j]) * up;
+  }
+}
+
 /// An affine model of the system F - level over a leaf X with centre c: by the mean value
 /// theorem, F_i(c + d) - level_i lies in value_i + sum_j J_ij(X) d_j for every c + d in X. It
 /// is built with one evaluation per equation, and then encloses F on each of the leaf's faces
@@ -37,13 +50,7 @@ void buildLeafModel(std::vector<MidRadEvaluator<S>>& evaluators, const Box<S>& b
   using std::abs;
   const std::size_t m = evaluators.size(), n = static_cast<std::size_t>(box.dim());
   const S eps = 2 * ScalarTraits<S>::epsilon();
-  const S up = S(1) + S(8) * ScalarTraits<S>::epsilon();
-  model.centre.resize(n);
-  model.radius.resize(n);
-  for (std::size_t j = 0; j < n; ++j) {
-    model.centre[j] = (box.lo[j] + box.hi[j]) / 2;
-    model.radius[j] = std::max<S>(box.hi[j] - model.centre[j], model.centre[j] - box.lo[j]) * up;
-  }
+  centreAndRadius(box, model.centre, model.radius);
   thread_local std::vector<S> zero;
   zero.assign(n, S(0));
   model.valueMid.resize(m);
