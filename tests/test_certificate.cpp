@@ -5,9 +5,12 @@
 // only a combination of the equations can prove that M misses a face above the maximum.
 #include <catch2/catch.hpp>
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <random>
 #include <span>
 #include <vector>
@@ -166,4 +169,46 @@ TEST_CASE("The one-switch ||I - Y A|| kernel equals per-operation interval arith
   // Both outcomes of the test are exercised.
   CHECK(belowOne > 20);
   CHECK(belowOne < 580);
+}
+
+TEMPLATE_TEST_CASE("certificate: the graph test proves flats in any rotation", "[certificate]",
+                   NDC_SCALARS) {
+  // A k-flat in R^n in a random rotation Q: its Jacobian is the first m = n - k rows of Q,
+  // enclosed here with radius r = 0.9 / (n sqrt(m)). Over the flat's tangent space T (the
+  // other rows of Q), [J; T^T] is Q with its first m rows widened by r, and with Y = Q^T the
+  // bound ||I - Y A||_inf <= n r max_l sum_i |Q_il| <= n r sqrt(m) = 0.9: the test must prove
+  // every such flat a graph, whichever way it lies against the axes.
+  using S = TestType;
+  ndc::test::PrecisionScope<S> precision;
+  std::mt19937 rng(31);
+  std::normal_distribution<double> normal;
+  int proven = 0, cases = 0;
+  for (int n = 3; n <= 8; ++n) {
+    for (int k = 1; k <= 2; ++k) {
+      const int m = n - k;
+      ndc::GraphTest<S> graphTest(n, m);
+      std::vector<int> axes(n);
+      std::iota(axes.begin(), axes.end(), 0);
+      for (int rotation = 0; rotation < 20; ++rotation) {
+        Eigen::MatrixXd g(n, n);
+        for (int i = 0; i < n; ++i) {
+          for (int j = 0; j < n; ++j) g(i, j) = normal(rng);
+        }
+        const Eigen::MatrixXd q = Eigen::HouseholderQR<Eigen::MatrixXd>(g).householderQ();
+        const double radius = 0.9 / (n * std::sqrt(double(m)));
+        std::vector<Interval<S>> jacobian;
+        for (int i = 0; i < m; ++i) {
+          for (int j = 0; j < n; ++j)
+            jacobian.emplace_back(S(q(i, j) - radius), S(q(i, j) + radius));
+        }
+        INFO("n = " << n << ", k = " << k << ", rotation " << rotation);
+        const bool graph =
+            graphTest.graph(std::span<const Interval<S>>(jacobian), std::span<const int>(axes));
+        CHECK(graph);
+        proven += graph;
+        ++cases;
+      }
+    }
+  }
+  CHECK(proven == cases);
 }

@@ -44,6 +44,16 @@ class GraphTest {
 
  private:
   bool regular(std::span<const Interval<S>> jacobian, std::span<const int> columns) const;
+  /// The graph test over a linear map instead of coordinates: with T (a x (a - m)) an
+  /// orthonormal basis of the midpoint Jacobian's null space over `axes`, whether the square
+  /// interval matrix [J; T^T] is regular. Then (F, T^T x) is injective on the box (mean value
+  /// theorem, as for a block), so M_c ∩ box is the graph of a function of T^T x; a block of
+  /// coordinates is the case T = the dropped unit vectors.
+  bool tangentGraph(std::span<const Interval<S>> jacobian, std::span<const int> axes) const;
+  /// Whether the m x m interval matrix with entry (i, t) at matrix[i * stride + columns[t]] is
+  /// regular: ||I - Y A||_inf < 1 with Y the inverse of its midpoint.
+  static bool regularSquare(int m, std::span<const Interval<S>> matrix, std::size_t stride,
+                            std::span<const int> columns);
 
   int n_, m_;
 };
