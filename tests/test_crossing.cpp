@@ -10,6 +10,8 @@
 // generated corpora of such inputs are in test_degenerate.cpp.
 #include <catch2/catch.hpp>
 
+#include <Eigen/Dense>
+
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -268,6 +270,9 @@ TEMPLATE_TEST_CASE("crossing: a leaf's affine model never excludes a face throug
         const std::array<int, 2> axes{a0, a1};
         INFO("n = " << n << ", system " << system << ", trial " << trial);
         CHECK_FALSE(ndc::faceExcluded(model, box, std::span<const int>(axes), side));
+        ndc::FacePreconditioner<S> pre;
+        ndc::buildFacePreconditioner(model, std::span<const int>(axes), pre);
+        CHECK_FALSE(ndc::faceKrawczykExcludes(model, pre, box, std::span<const int>(axes), side));
         ++faces;
       }
       // A leaf far outside the sphere: every face excluded.
@@ -279,6 +284,100 @@ TEMPLATE_TEST_CASE("crossing: a leaf's affine model never excludes a face throug
     }
   }
   CHECK(faces == 6 * 6 * 40);
+}
+
+TEMPLATE_TEST_CASE("crossing: the Krawczyk test of a leaf's faces decides linear systems",
+                   "[crossing]", NDC_SCALARS) {
+  // Generated 2-flats in R^3..R^8: n - 2 hyperplanes with small integer coefficients through a
+  // point of the 1/64 grid (every literal exact). On a face of a leaf the system is square and
+  // the affine model exact, so the face holds a zero exactly when the solution q of the face's
+  // linear system lies in the face: the test must exclude every face whose q lies outside by
+  // more than 1% of the width and none whose q lies inside. Single equations (faceExcluded)
+  // cannot decide most of the faces near the flat.
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  std::mt19937 rng(29);
+  std::uniform_int_distribution<int> grid(-64, 64), coefficient(-3, 3);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int outside = 0, inside = 0, onlyJointly = 0;
+  for (int n = 3; n <= 8; ++n) {
+    const int m = n - 2;
+    for (int system = 0; system < 6; ++system) {
+      std::vector<std::string> names;
+      for (int j = 0; j < n; ++j) names.push_back("x" + std::to_string(j));
+      std::vector<double> p(n);
+      for (int j = 0; j < n; ++j) p[j] = grid(rng) / 64.0;
+      Eigen::MatrixXd a(m, n);
+      std::vector<ndc::Expression> equations;
+      for (int i = 0; i < m; ++i) {
+        std::ostringstream plane;
+        double offset = 0;
+        for (int j = 0; j < n; ++j) {
+          a(i, j) = coefficient(rng);
+          plane << (j ? " + " : "") << a(i, j) << "*" << names[j];
+          offset += a(i, j) * p[j];
+        }
+        plane << " - (" << offset << ")";
+        equations.push_back(ndc::Expression::parse(plane.str(), names));
+      }
+      std::vector<ndc::MidRadEvaluator<S>> evaluators;
+      for (const ndc::Expression& e : equations) evaluators.emplace_back(e.sharedTape());
+      const std::vector<S> level(equations.size(), S(0));
+      ndc::LeafModel<S> model;
+      ndc::FacePreconditioner<S> pre;
+      for (int trial = 0; trial < 40; ++trial) {
+        // A leaf of width w near p (within 2 w), and one of its faces.
+        const double width = std::pow(2.0, -static_cast<int>(rng() % 12));
+        ndc::Box<S> box{std::vector<S>(n), std::vector<S>(n)};
+        std::vector<double> lo(n);
+        for (int j = 0; j < n; ++j) {
+          lo[j] = p[j] - width * (std::round(64 * (3 * unit(rng) - 1)) / 64);
+          box.lo[j] = S(lo[j]);
+          box.hi[j] = S(lo[j] + width);
+        }
+        const int a0 = static_cast<int>(rng() % n);
+        const int a1 = (a0 + 1 + static_cast<int>(rng() % (n - 1))) % n;
+        const int side = static_cast<int>(rng() % 4);
+        const std::array<int, 2> axes{a0, a1};
+        // q: A_free q_free = A p - A_fixed x_fixed.
+        std::vector<int> free;
+        for (int j = 0; j < n; ++j) {
+          if (j != a0 && j != a1) free.push_back(j);
+        }
+        Eigen::MatrixXd af(m, m);
+        Eigen::VectorXd rhs = a * Eigen::Map<const Eigen::VectorXd>(p.data(), n);
+        for (int i = 0; i < m; ++i) {
+          for (int t = 0; t < m; ++t) af(i, t) = a(i, free[t]);
+          for (int t = 0; t < 2; ++t)
+            rhs(i) -= a(i, axes[t]) * (lo[axes[t]] + ((side >> t) & 1 ? width : 0));
+        }
+        const Eigen::FullPivLU<Eigen::MatrixXd> lu(af);
+        if (lu.rank() < m || std::abs(lu.determinant()) < 1) continue;
+        const Eigen::VectorXd q = lu.solve(rhs);
+        double beyond = -1;  // how far q lies outside the face, in widths (negative: inside)
+        for (int t = 0; t < m; ++t) {
+          const double x = (q(t) - lo[free[t]]) / width;
+          beyond = std::max({beyond, -x, x - 1});
+        }
+        if (std::abs(beyond) < 0.01) continue;
+        ndc::buildLeafModel(evaluators, box, std::span<const S>(level), model);
+        ndc::buildFacePreconditioner(model, std::span<const int>(axes), pre);
+        const bool excluded =
+            ndc::faceKrawczykExcludes(model, pre, box, std::span<const int>(axes), side);
+        INFO("n = " << n << ", system " << system << ", trial " << trial << ", q beyond the face "
+                    << beyond << " widths");
+        CHECK(excluded == (beyond > 0));
+        (beyond > 0 ? outside : inside) += 1;
+        if (excluded && !ndc::faceExcluded(model, box, std::span<const int>(axes), side))
+          ++onlyJointly;
+      }
+    }
+  }
+  INFO(outside << " faces outside, " << inside << " inside, " << onlyJointly
+               << " excluded only jointly");
+  CHECK(outside > 200);
+  CHECK(inside > 50);
+  CHECK(onlyJointly > 0);
 }
 
 TEMPLATE_TEST_CASE("crossing: closed curves in R^2..R^6", "[crossing]", NDC_SCALARS) {

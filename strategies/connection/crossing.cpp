@@ -1082,7 +1082,8 @@ class AdaptiveCrossing {
   template <class Patches>
   FaceResult<S> solveFace(std::int32_t leaf, const std::array<int, 2>& axes, int side,
                           Patches&& patches, std::span<const S> margins,
-                          const LeafModel<S>* model = nullptr) const {
+                          const LeafModel<S>* model = nullptr,
+                          const FacePreconditioner<S>* pre = nullptr) const {
     const Box<S> box = leafBox(leaf);
     const auto ci = tree_.index(leaf);
     const std::int64_t top = tree_.grid(tree_.level(leaf)).cellsPerAxis();
@@ -1105,8 +1106,11 @@ class AdaptiveCrossing {
     std::vector<std::vector<S>> roots;
     FaceResult<S> r;
     // The leaf's affine model first: it excludes most faces without an evaluation on them.
-    if (model && faceExcluded(*model, box, std::span<const int>(axes.data(), k_), side))
+    const std::span<const int> fixed(axes.data(), static_cast<std::size_t>(k_));
+    if (model && (faceExcluded(*model, box, fixed, side) ||
+                  (pre && faceKrawczykExcludes(*model, *pre, box, fixed, side)))) {
       return faceOutcome(std::move(r), roots, box, freeAxes, ends);
+    }
     FaceSolver<S> solver(in_.system, maxFaceDepth_, level_, position_.slack);
     if (m_ > 1 && byEvaluation_ &&
         solver.solveByEvaluation(point, freeAxes, faceBox, ends, roots)) {
@@ -1202,12 +1206,32 @@ class AdaptiveCrossing {
   std::vector<OwnedFace> ownedFaces(std::int32_t c) const {
     const int level = tree_.level(c);
     const std::vector<std::int32_t> ci(tree_.index(c).begin(), tree_.index(c).end());
-    std::vector<std::int32_t> corner(n_), position(n_);
+    std::vector<std::int32_t> position(n_);
+    // The regions next to c across one face (2 per axis), looked up once: every face choice
+    // with that axis meets them, so only the diagonal regions are looked up per choice.
+    std::vector<Occupant> across(2 * std::size_t(n_));
+    std::vector<std::uint8_t> looked(2 * std::size_t(n_), 0);
+    const auto region = [&](std::span<const int> axes, std::span<const int> offset) -> Occupant {
+      int moved = -1, count = 0;
+      for (std::size_t t = 0; t < axes.size(); ++t) {
+        if (offset[t] != 0) moved = int(t), ++count;
+      }
+      if (count == 0) return Occupant{Occ::kLeaf, c, 0};
+      const auto lookup = [&] {
+        std::copy(ci.begin(), ci.end(), position.begin());
+        for (std::size_t t = 0; t < axes.size(); ++t) position[axes[t]] += offset[t];
+        return tree_.find(level, position);
+      };
+      if (count > 1) return lookup();
+      const std::size_t slot = 2 * std::size_t(axes[moved]) + (offset[moved] > 0 ? 1 : 0);
+      if (!looked[slot]) across[slot] = lookup(), looked[slot] = 1;
+      return across[slot];
+    };
     std::array<Occupant, 4> around;
     std::vector<OwnedFace> out;
     for (std::size_t a = 0; a < fixedAxes_.size(); ++a) {
       for (int side = 0; side < (1 << k_); ++side) {
-        if (!ownedFace(level, ci, a, side, corner, position, around, c)) continue;
+        if (!ownedFace(level, a, side, around, c, region)) continue;
         out.push_back({static_cast<std::uint8_t>(a), static_cast<std::uint8_t>(side), around});
       }
     }
@@ -1235,23 +1259,23 @@ class AdaptiveCrossing {
     return static_cast<std::uint64_t>(c) * faceTypes + (a << k_) + std::uint64_t(side);
   }
 
-  /// Whether face (a, side) of leaf c (at `level`, index ci) is a minimal m-face that c owns;
-  /// its lower corner into `corner`, the regions around it into `around` (`position`: scratch).
-  bool ownedFace(int level, const std::vector<std::int32_t>& ci, std::size_t a, int side,
-                 std::vector<std::int32_t>& corner, std::vector<std::int32_t>& position,
-                 std::array<Occupant, 4>& around, std::int32_t c) const {
+  /// Whether face (a, side) of leaf c (at `level`) is a minimal m-face that c owns; the
+  /// regions around it into `around`, each from region(axes, offset), the region at c's index
+  /// moved by offset[t] along axes[t].
+  template <class Region>
+  bool ownedFace(int level, std::size_t a, int side, std::array<Occupant, 4>& around,
+                 std::int32_t c, Region&& region) const {
     const auto& axes = fixedAxes_[a];
-    std::copy(ci.begin(), ci.end(), corner.begin());
-    for (int t = 0; t < k_; ++t) corner[axes[t]] += (side >> t) & 1;
     // The regions around the face in cyclic order (k = 2): (-a,-b), (+a,-b), (+a,+b),
-    // (-a,+b). A finer region means the face is not minimal: its parts belong to the
-    // finer leaves. The face belongs to the first leaf of its own level.
+    // (-a,+b), relative to the face's lower corner, which is c's corner moved by `side`. A
+    // finer region means the face is not minimal: its parts belong to the finer leaves. The
+    // face belongs to the first leaf of its own level.
     bool minimal = true, owner = true;
+    std::array<int, 2> offset{0, 0};
     for (int q = 0; q < (1 << k_) && minimal; ++q) {
       const int bits = k_ == 1 ? q : (q == 0 ? 0 : q == 1 ? 1 : q == 2 ? 3 : 2);
-      std::copy(corner.begin(), corner.end(), position.begin());
-      for (int t = 0; t < k_; ++t) position[axes[t]] += ((bits >> t) & 1) - 1;
-      around[q] = tree_.find(level, position);
+      for (int t = 0; t < k_; ++t) offset[t] = ((side >> t) & 1) + ((bits >> t) & 1) - 1;
+      around[q] = region(std::span<const int>(axes.data(), k_), std::span<const int>(offset));
       minimal = around[q].kind != Occ::kFiner;
       if (around[q].kind == Occ::kLeaf && tree_.level(around[q].leaf) == level &&
           around[q].leaf < c)
@@ -1338,6 +1362,11 @@ class AdaptiveCrossing {
     // first face not solved yet.
     LeafModel<S> model;
     bool modelled = false;
+    // The Krawczyk preconditioners of the faces' axis choices, each built on first use.
+    thread_local std::vector<FacePreconditioner<S>> pre;
+    thread_local std::vector<std::uint8_t> built;
+    if (pre.size() < fixedAxes_.size()) pre.resize(fixedAxes_.size());
+    built.assign(fixedAxes_.size(), 0);
     for (const OwnedFace& f : out.owned) {
       const std::uint64_t key = faceKey(c, f.a, f.side);
       if (faces_.count(key)) continue;
@@ -1349,8 +1378,13 @@ class AdaptiveCrossing {
         buildLeafModel(threadEvaluators(in_.system), leafBox(c), std::span<const S>(level_), model);
         modelled = true;
       }
-      out.faces.emplace_back(key, solveFace(c, fixedAxes_[f.a], f.side, restricted, rf.margins,
-                                            modelled ? &model : nullptr));
+      if (modelled && !built[f.a]) {
+        buildFacePreconditioner(model, std::span<const int>(fixedAxes_[f.a].data(), k_), pre[f.a]);
+        built[f.a] = 1;
+      }
+      out.faces.emplace_back(
+          key, solveFace(c, fixedAxes_[f.a], f.side, restricted, rf.margins,
+                         modelled ? &model : nullptr, modelled ? &pre[f.a] : nullptr));
     }
   }
 

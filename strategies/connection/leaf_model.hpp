@@ -10,7 +10,11 @@
 #include <span>
 #include <vector>
 
+#include <Eigen/Dense>
+#include <boost/multiprecision/eigen.hpp>
+
 #include "framework/core/box.hpp"
+#include "framework/core/iteration.hpp"
 #include "framework/core/midrad.hpp"
 #include "framework/core/scalar.hpp"
 
@@ -106,6 +110,122 @@ bool faceExcluded(const LeafModel<S>& model, const Box<S>& box, std::span<const 
     }
     magnitude += radius;
     if (abs(centre) > radius + gamma * magnitude + tiny) return true;
+  }
+  return false;
+}
+
+/// The Krawczyk test of the faces of a leaf that fix one choice of k axes, from the leaf's
+/// affine model: such a face has m free axes, as many as equations, and on it F - level is
+/// g(d) = F(c) - level + J_fixed d_fixed + J_free d_free, d the offset from the leaf's centre
+/// c (its free part ranging over D = [-radius, radius]). With Y an approximate inverse of the
+/// midpoint of J_free, every zero of g in D lies in K = -Y g(0) + (I - Y J_free(X)) D, so a
+/// face where K misses D holds none. Y and the spread (I - Y J_free(X)) D are shared by the 2^k
+/// faces of the choice; each face costs O(m^2). Where single equations cannot exclude a face
+/// (each F_i vanishes somewhere on it, near M but not on it), this decides with all of them
+/// together, as solving the face would.
+template <class S>
+struct FacePreconditioner {
+  std::vector<int> free;  ///< the free axes (m)
+  std::vector<S> y;       ///< Y, m x m, row-major
+  std::vector<S> spread;  ///< s_l >= sum_j |I - Y J_free(X)|_lj radius_j (rounded up)
+  bool valid = false;
+};
+
+/// Builds `out` for the faces of the model's leaf that fix `axes` (k of them).
+template <class S>
+void buildFacePreconditioner(const LeafModel<S>& model, std::span<const int> axes,
+                             FacePreconditioner<S>& out) {
+  using std::abs;
+  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+  out.valid = false;
+  if (!model.valid) return;
+  const std::size_t m = model.valueMid.size(), n = model.centre.size();
+  out.free.clear();
+  for (std::size_t j = 0; j < n; ++j) {
+    if (std::find(axes.begin(), axes.end(), static_cast<int>(j)) == axes.end())
+      out.free.push_back(static_cast<int>(j));
+  }
+  if (out.free.size() != m) return;
+  Matrix mid(m, m);
+  for (std::size_t i = 0; i < m; ++i) {
+    for (std::size_t t = 0; t < m; ++t) mid(i, t) = model.gradMid[i * n + out.free[t]];
+  }
+  const Eigen::FullPivLU<Matrix> lu(mid);
+  if (lu.rank() < static_cast<Eigen::Index>(m)) return;
+  const Matrix inverse = lu.inverse();
+  out.y.resize(m * m);
+  for (std::size_t l = 0; l < m; ++l) {
+    for (std::size_t i = 0; i < m; ++i) out.y[l * m + i] = inverse(l, i);
+  }
+  // |I - Y J_free(X)|_lj <= |delta_lj - sum_i Y_li mid_ij| + sum_i |Y_li| rad_ij, plus the
+  // gamma_p bound of the sums' rounding; then the spread, rounded up the same way.
+  const S gamma = S(8 * (n + m + 8)) * ScalarTraits<S>::epsilon();
+  const S tiny = S(std::numeric_limits<double>::min());
+  out.spread.assign(m, S(0));
+  for (std::size_t l = 0; l < m; ++l) {
+    S spread = 0, spreadMagnitude = 0;
+    for (std::size_t t = 0; t < m; ++t) {
+      const std::size_t j = static_cast<std::size_t>(out.free[t]);
+      S centre = S(l == t ? 1 : 0), magnitude = abs(centre), radius = 0;
+      for (std::size_t i = 0; i < m; ++i) {
+        const S yli = out.y[l * m + i];
+        centre -= yli * model.gradMid[i * n + j];
+        magnitude += abs(yli * model.gradMid[i * n + j]);
+        radius += abs(yli) * model.gradRad[i * n + j];
+      }
+      magnitude += radius;
+      const S entry = abs(centre) + radius + gamma * magnitude + tiny;
+      spread += entry * model.radius[j];
+      spreadMagnitude += entry * model.radius[j];
+    }
+    out.spread[l] = spread + gamma * spreadMagnitude + tiny;
+    if (!isFinite(out.spread[l])) return;
+  }
+  out.valid = true;
+}
+
+/// True when the Krawczyk test of `pre` proves that F - level has no zero on the face of
+/// `box` (the model's leaf) that fixes `axes` (its first k entries) at the ends `side` (bit t:
+/// upper end of axes[t]).
+template <class S>
+bool faceKrawczykExcludes(const LeafModel<S>& model, const FacePreconditioner<S>& pre,
+                          const Box<S>& box, std::span<const int> axes, int side) {
+  using std::abs;
+  if (!model.valid || !pre.valid) return false;
+  const std::size_t m = model.valueMid.size(), n = model.centre.size();
+  const S eps = 2 * ScalarTraits<S>::epsilon();
+  const S gamma = S(8 * (n + m + 8)) * ScalarTraits<S>::epsilon();
+  const S tiny = S(std::numeric_limits<double>::min());
+  // g(0) = F(c) - level + J_fixed(X) d_fixed: centre, radius and magnitude per equation.
+  thread_local std::vector<S> gc, gr, gm;
+  gc.resize(m), gr.resize(m), gm.resize(m);
+  for (std::size_t i = 0; i < m; ++i) {
+    S centre = model.valueMid[i], magnitude = abs(centre), radius = model.valueRad[i];
+    for (std::size_t t = 0; t < axes.size(); ++t) {
+      const std::size_t j = static_cast<std::size_t>(axes[t]);
+      const S x = (side >> t) & 1 ? box.hi[j] : box.lo[j];
+      const S d = x - model.centre[j];  // rounded: off by at most eps |d|
+      const S g = model.gradMid[i * n + j], r = model.gradRad[i * n + j];
+      centre += g * d;
+      magnitude += abs(g * d);
+      radius += r * abs(d) + (abs(g) + r) * eps * abs(d);
+    }
+    gc[i] = centre;
+    gr[i] = radius + gamma * (magnitude + radius);
+    gm[i] = magnitude + gr[i];
+  }
+  // K_l = -(Y g(0))_l + [-s_l, s_l] against [-radius_l, radius_l] of free axis l.
+  for (std::size_t l = 0; l < m; ++l) {
+    S centre = 0, radius = 0, magnitude = 0;
+    for (std::size_t i = 0; i < m; ++i) {
+      const S yli = pre.y[l * m + i];
+      centre += yli * gc[i];
+      radius += abs(yli) * gr[i];
+      magnitude += abs(yli) * gm[i];
+    }
+    const S reach = radius + gamma * magnitude + tiny + pre.spread[l] +
+                    model.radius[static_cast<std::size_t>(pre.free[l])];
+    if (abs(centre) > reach * (1 + gamma)) return true;
   }
   return false;
 }
