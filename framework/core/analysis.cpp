@@ -20,7 +20,6 @@
 #include <numeric>
 #include <span>
 #include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
 #include "framework/core/parallel.hpp"
@@ -88,6 +87,31 @@ void subsets(std::span<const std::int32_t> simplex, int size, std::vector<std::i
   }
 }
 
+/// Clears keep[s] of every record s (`width` integers each in `keys`) whose key equals that
+/// of an earlier record that is kept: a sort of record numbers instead of a hash set of
+/// vectors (one allocation per record), with the same result.
+void markDuplicates(const std::vector<std::int32_t>& keys, std::size_t width,
+                    std::vector<std::uint8_t>& keep) {
+  std::vector<std::uint32_t> order;
+  order.reserve(keep.size());
+  for (std::size_t s = 0; s < keep.size(); ++s) {
+    if (keep[s]) order.push_back(static_cast<std::uint32_t>(s));
+  }
+  const auto key = [&](std::uint32_t s) { return keys.begin() + std::ptrdiff_t(s * width); };
+  const auto less = [&](std::uint32_t a, std::uint32_t b) {
+    const auto x = key(a), y = key(b);
+    for (std::size_t i = 0; i < width; ++i) {
+      if (x[i] != y[i]) return x[i] < y[i];
+    }
+    return a < b;
+  };
+  std::sort(order.begin(), order.end(), less);
+  for (std::size_t i = 1; i < order.size(); ++i) {
+    if (std::equal(key(order[i]), key(order[i]) + std::ptrdiff_t(width), key(order[i - 1])))
+      keep[order[i]] = 0;
+  }
+}
+
 }  // namespace
 
 template <class S>
@@ -103,7 +127,10 @@ Complex<S> weld(const Complex<S>& complex, double tolerance) {
   const S tol2 = fuzzy ? S(tolerance) * S(tolerance) : S(0);
 
   // Step 1: greedy merge through the hashed bucket grid.
-  std::unordered_map<std::uint64_t, std::vector<std::int32_t>> buckets;
+  // bucket hash -> its latest vertex; next[r]: the vertex added to the bucket before r.
+  std::unordered_map<std::uint64_t, std::int32_t> buckets;
+  std::vector<std::int32_t> next;
+  buckets.reserve(complex.vertexCount());
   std::vector<std::int32_t> remap(complex.vertexCount());
   std::vector<std::int64_t> home(n), probe(n);
   std::vector<std::array<int, 2>> reach(n);  // per axis: lowest and highest bucket offset
@@ -135,7 +162,7 @@ Complex<S> weld(const Complex<S>& complex, double tolerance) {
       for (int j = 0; j < n; ++j) probe[j] = home[j] + offset[j];
       auto it = buckets.find(hashOf(probe));
       if (it != buckets.end()) {
-        for (std::int32_t r : it->second) {
+        for (std::int32_t r = it->second; r >= 0; r = next[r]) {
           const auto y = out.vertex(r);
           S d2 = 0;
           for (int j = 0; j < n; ++j) d2 += (x[j] - y[j]) * (x[j] - y[j]);
@@ -149,20 +176,31 @@ Complex<S> weld(const Complex<S>& complex, double tolerance) {
     }
     if (found < 0) {
       found = out.addVertex(x, complex.vertexCell.empty() ? -1 : complex.vertexCell[v]);
-      buckets[hashOf(home)].push_back(found);
+      const auto [slot, added] = buckets.try_emplace(hashOf(home), found);
+      next.push_back(added ? -1 : slot->second);
+      slot->second = found;
     }
     remap[v] = found;
   }
 
-  // Step 2: remap the simplices, drop degenerate ones and duplicates (same vertex set).
-  std::unordered_set<std::vector<std::int32_t>, VectorHash> seen;
-  std::vector<std::int32_t> simplex(k + 1), sorted(k + 1);
-  for (std::size_t s = 0; s < complex.simplexCount(); ++s) {
-    for (int i = 0; i <= k; ++i) simplex[i] = remap[complex.simplices[s * (k + 1) + i]];
-    sorted = simplex;
-    std::sort(sorted.begin(), sorted.end());
-    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) continue;
-    if (!seen.insert(sorted).second) continue;
+  // Step 2: remap the simplices, drop degenerate ones and duplicates (same vertex set): the
+  // first of each vertex set stays, in the input's order.
+  const auto width = static_cast<std::size_t>(k + 1);
+  const std::size_t count = complex.simplexCount();
+  std::vector<std::int32_t> sorted(count * width);
+  std::vector<std::uint8_t> keep(count, 1);
+  for (std::size_t s = 0; s < count; ++s) {
+    const auto key = sorted.begin() + std::ptrdiff_t(s * width);
+    for (std::size_t i = 0; i < width; ++i) key[i] = remap[complex.simplices[s * width + i]];
+    std::sort(key, key + std::ptrdiff_t(width));
+    if (std::adjacent_find(key, key + std::ptrdiff_t(width)) != key + std::ptrdiff_t(width))
+      keep[s] = 0;
+  }
+  markDuplicates(sorted, width, keep);
+  std::vector<std::int32_t> simplex(width);
+  for (std::size_t s = 0; s < count; ++s) {
+    if (!keep[s]) continue;
+    for (std::size_t i = 0; i < width; ++i) simplex[i] = remap[complex.simplices[s * width + i]];
     out.addSimplex(simplex);
   }
   return out;
@@ -170,8 +208,9 @@ Complex<S> weld(const Complex<S>& complex, double tolerance) {
 
 namespace {
 
-/// The distinct edges of the simplices, each with the number of simplices on it.
-using EdgeCounts = std::unordered_map<std::uint64_t, std::int32_t>;
+/// The distinct edges of the simplices (by key, ascending), each with the number of simplices
+/// on it.
+using EdgeCounts = std::vector<std::pair<std::uint64_t, std::int32_t>>;
 
 /// Simplex s of `welded` as its k + 1 vertex numbers.
 template <class S>
@@ -186,16 +225,26 @@ template <class S>
 EdgeCounts countEdges(const Complex<S>& welded, MeshStats& stats) {
   const int k = welded.k;
   const std::size_t vertexCount = welded.vertexCount();
-  EdgeCounts edges;
   DisjointSets sets(vertexCount);
+  std::vector<std::uint64_t> keys;
+  keys.reserve(welded.simplexCount() * std::size_t(k * (k + 1) / 2));
   for (std::size_t s = 0; s < welded.simplexCount(); ++s) {
     const auto v = simplexAt(welded, s);
     for (int a = 0; a <= k; ++a) {
       for (int b = a + 1; b <= k; ++b) {
-        ++edges[edgeKey(v[a], v[b])];
+        keys.push_back(edgeKey(v[a], v[b]));
         sets.unite(v[a], v[b]);
       }
     }
+  }
+  // Sorted keys, then runs of equal ones (no hash node per edge).
+  std::sort(keys.begin(), keys.end());
+  EdgeCounts edges;
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    if (i == 0 || keys[i] != keys[i - 1])
+      edges.emplace_back(keys[i], 1);
+    else
+      ++edges.back().second;
   }
   stats.edges = static_cast<std::int64_t>(edges.size());
   for (std::size_t v = 0; v < vertexCount; ++v)

@@ -4,9 +4,9 @@
 #include <algorithm>
 #include <array>
 #include <cstddef>
-#include <deque>
-#include <unordered_map>
+#include <cstdint>
 #include <utility>
+#include <vector>
 
 namespace ndc {
 
@@ -36,46 +36,65 @@ std::array<Facet, 3> facetsOf(int k, const std::int32_t* s) {
   return f;
 }
 
-struct KeyHash {
-  std::size_t operator()(const std::array<std::int32_t, 2>& k) const {
-    return std::hash<std::uint64_t>()((std::uint64_t(std::uint32_t(k[0])) << 32) |
-                                      std::uint32_t(k[1]));
-  }
-};
-
 }  // namespace
+
+/// A facet of a simplex as one sortable record: the facet's key packed into 64 bits, the
+/// simplex, which of its facets it is, and the sign it induces.
+struct FacetEntry {
+  std::uint64_t key;
+  std::uint32_t simplex;
+  std::int32_t facet;
+  int sign;
+};
 
 bool orientSimplices(int k, std::vector<std::int32_t>& simplices) {
   if (k != 1 && k != 2) return true;
   const int width = k + 1;
   const std::size_t count = simplices.size() / width;
-  // Facet -> the simplices on it, with their signs.
-  std::unordered_map<std::array<std::int32_t, 2>, std::vector<std::pair<std::size_t, int>>, KeyHash>
-      on;
-  on.reserve(count * width);
-  for (std::size_t s = 0; s < count; ++s)
+  // Facet -> the simplices on it: the facets of all simplices sorted by key (then simplex),
+  // so that those on one facet are adjacent (no hash node or vector per facet).
+  std::vector<FacetEntry> entries;
+  entries.reserve(count * width);
+  for (std::size_t s = 0; s < count; ++s) {
+    const auto facets = facetsOf(k, &simplices[s * width]);
     for (int i = 0; i < width; ++i) {
-      const Facet f = facetsOf(k, &simplices[s * width])[i];
-      on[f.key].emplace_back(s, f.sign);
+      const std::uint64_t key =
+          (std::uint64_t(std::uint32_t(facets[i].key[0])) << 32) | std::uint32_t(facets[i].key[1]);
+      entries.push_back({key, static_cast<std::uint32_t>(s), i, facets[i].sign});
     }
+  }
+  std::sort(entries.begin(), entries.end(), [](const FacetEntry& a, const FacetEntry& b) {
+    return a.key != b.key ? a.key < b.key : a.simplex < b.simplex;
+  });
+  // For each facet i of simplex s: the entry of the other simplex on it when exactly two
+  // simplices share it, else -1 (boundary or non-manifold: nothing to agree with).
+  std::vector<std::int64_t> across(count * width, -1);
+  for (std::size_t b = 0, e = 0; b < entries.size(); b = e) {
+    e = b + 1;
+    while (e < entries.size() && entries[e].key == entries[b].key) ++e;
+    if (e - b != 2) continue;
+    across[std::size_t(entries[b].simplex) * width + entries[b].facet] = std::int64_t(b + 1);
+    across[std::size_t(entries[b + 1].simplex) * width + entries[b + 1].facet] = std::int64_t(b);
+  }
   // Breadth-first per component: flip[s] = -1 when s is to be reversed.
   std::vector<int> flip(count, 0);
   bool orientable = true;
-  std::deque<std::size_t> queue;
+  std::vector<std::size_t> queue;
+  queue.reserve(count);
   for (std::size_t start = 0; start < count; ++start) {
     if (flip[start]) continue;
     flip[start] = 1;
-    queue.push_back(start);
-    while (!queue.empty()) {
-      const std::size_t s = queue.front();
-      queue.pop_front();
+    queue.assign(1, start);
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const std::size_t s = queue[head];
+      const auto facets = facetsOf(k, &simplices[s * width]);
       for (int i = 0; i < width; ++i) {
-        const Facet f = facetsOf(k, &simplices[s * width])[i];
-        const auto& sharing = on[f.key];
-        if (sharing.size() != 2) continue;  // boundary or non-manifold: nothing to agree with
-        const auto& [u, sign] = sharing[0].first == s ? sharing[1] : sharing[0];
+        const std::int64_t other = across[s * width + i];
+        if (other < 0) continue;
+        const std::size_t u = entries[std::size_t(other)].simplex;
+        const int sign = entries[std::size_t(other)].sign;
         // Opposite induced orientations: flip[s] * f.sign = -flip[u] * sign.
-        const int wanted = -flip[s] * f.sign * sign;
+        const int wanted = -flip[s] * facets[i].sign * sign;
         if (!flip[u]) {
           flip[u] = wanted;
           queue.push_back(u);
