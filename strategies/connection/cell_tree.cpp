@@ -20,7 +20,7 @@ CellTree::CellTree(const Grid& base, int maxLevel)
 
 std::int32_t CellTree::addLeaf(int level, std::span<const std::int32_t> index, bool solution) {
   const auto leaf = static_cast<std::int32_t>(level_.size());
-  leaves_[level - base_].emplace(grid(level).pack(index), leaf);
+  leaves_[level - base_].insert(grid(level).pack(index), leaf);
   level_.push_back(static_cast<std::int8_t>(level));
   index_.insert(index_.end(), index.begin(), index.end());
   active_.push_back(1);
@@ -34,7 +34,7 @@ std::int32_t CellTree::refine(std::int32_t leaf, const std::vector<std::uint8_t>
   if (level >= maxLevel_) throw std::logic_error("CellTree::refine: at the maximum level");
   const CellKey key = grid(level).pack(index(leaf));
   leaves_[level - base_].erase(key);
-  internal_[level - base_].insert(key);
+  internal_[level - base_].insert(key, 1);
   active_[leaf] = 0;
   solutionLeaves_ -= solution_[leaf];
   const std::vector<std::int32_t> parent(index(leaf).begin(), index(leaf).end());
@@ -67,13 +67,12 @@ Occupant CellTree::find(int level, std::span<const std::int32_t> index) const {
   for (int l = base_; l <= level; ++l) {
     for (int j = 0; j < n_; ++j) at[j] = index[j] >> (level - l);
     const CellKey key = grid(l).pack(at);
-    const auto it = leaves_[l - base_].find(key);
-    if (it != leaves_[l - base_].end()) {
+    if (const std::int32_t* leaf = leaves_[l - base_].find(key)) {
       out.kind = Occupant::Kind::kLeaf;
-      out.leaf = it->second;
+      out.leaf = *leaf;
       return out;
     }
-    if (!internal_[l - base_].count(key)) {
+    if (!internal_[l - base_].contains(key)) {
       out.kind = Occupant::Kind::kEmpty;
       out.key = key;
       if (l != base_) throw std::logic_error("CellTree::find: a refined cell lost a child");

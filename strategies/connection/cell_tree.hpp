@@ -5,10 +5,9 @@
 
 #include <cstdint>
 #include <span>
-#include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
+#include "framework/core/flat_map.hpp"
 #include "framework/core/grid.hpp"
 
 namespace ndc {
@@ -67,8 +66,8 @@ class CellTree {
  private:
   int n_, base_, maxLevel_;
   std::vector<Grid> grids_;
-  std::vector<CellMap<std::int32_t>> leaves_;  // per level - base
-  std::vector<CellSet> internal_;              // per level - base
+  std::vector<FlatMap<CellKey, std::int32_t>> leaves_;    // per level - base
+  std::vector<FlatMap<CellKey, std::uint8_t>> internal_;  // per level - base (a set)
   std::vector<std::int8_t> level_;
   std::vector<std::int32_t> index_;
   std::vector<std::uint8_t> active_, solution_;
