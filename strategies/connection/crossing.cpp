@@ -1163,7 +1163,7 @@ class AdaptiveCrossing {
     prefetched_.clear();
     prefetchFrom_ = prefetchEnd_ = 0;
     std::int64_t degenerate = 0;
-    std::vector<std::int32_t> corner(n_);
+    std::vector<std::int32_t> corner(n_), ci;
     std::array<Occupant, 4> around;
     touchLeaves_.clear();
     for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
@@ -1176,7 +1176,7 @@ class AdaptiveCrossing {
       if (empty_[c] == 1) continue;  // no level set between M and M_c meets it
       const int level = tree_.level(c);
       // A copy: touch leaves added below may move the tree's index storage.
-      const std::vector<std::int32_t> ci(tree_.index(c).begin(), tree_.index(c).end());
+      ci.assign(tree_.index(c).begin(), tree_.index(c).end());
       const bool known = c >= prefetchFrom_ && c < prefetchEnd_;
       const std::vector<OwnedFace> all = known ? std::vector<OwnedFace>() : ownedFaces(c);
       for (const OwnedFace& f : known ? prefetched_[c].owned : all) {
@@ -1205,12 +1205,16 @@ class AdaptiveCrossing {
   /// leaf already there), so this list stays valid for the whole walk.
   std::vector<OwnedFace> ownedFaces(std::int32_t c) const {
     const int level = tree_.level(c);
-    const std::vector<std::int32_t> ci(tree_.index(c).begin(), tree_.index(c).end());
-    std::vector<std::int32_t> position(n_);
+    // Per-thread scratch (ownedFaces runs in prefetchLeaf's tasks): no allocation per leaf.
+    thread_local std::vector<std::int32_t> ci, position;
+    ci.assign(tree_.index(c).begin(), tree_.index(c).end());
+    position.resize(n_);
     // The regions next to c across one face (2 per axis), looked up once: every face choice
     // with that axis meets them, so only the diagonal regions are looked up per choice.
-    std::vector<Occupant> across(2 * std::size_t(n_));
-    std::vector<std::uint8_t> looked(2 * std::size_t(n_), 0);
+    thread_local std::vector<Occupant> across;
+    thread_local std::vector<std::uint8_t> looked;
+    across.resize(2 * std::size_t(n_));
+    looked.assign(2 * std::size_t(n_), 0);
     const auto region = [&](std::span<const int> axes, std::span<const int> offset) -> Occupant {
       int moved = -1, count = 0;
       for (std::size_t t = 0; t < axes.size(); ++t) {
