@@ -1566,6 +1566,19 @@ class AdaptiveCrossing {
   /// columns of the free axes form a regular block. `excluded`: F - c provably has no zero on
   /// the box (for a face, that alone passes the face graph test).
   bool evaluatedGraph(const Box<S>& box, int fixed, bool& excluded, LeafTests& t) const {
+    thread_local std::vector<int> all;
+    all.resize(n_);
+    std::iota(all.begin(), all.end(), 0);
+    if (!evaluatedJacobian(box, t.jacobian, excluded)) return false;
+    if (fixed < 0) return t.test.graph(t.jacobian, all);
+    return excluded || t.test.graph(t.jacobian, freeAxes(fixed));
+  }
+
+  /// J(X) over `box` (m x n, row-major) from midpoint-radius runs of the programs into
+  /// `jacobian`; `excluded`: some F_i - c_i provably has no zero on the box. False when a run
+  /// fails.
+  bool evaluatedJacobian(const Box<S>& box, std::vector<Interval<S>>& jacobian,
+                         bool& excluded) const {
     thread_local std::vector<S> centre, radius;
     thread_local std::vector<Interval<S>> fy;
     thread_local std::vector<int> all;
@@ -1573,24 +1586,6 @@ class AdaptiveCrossing {
     all.resize(n_);
     std::iota(all.begin(), all.end(), 0);
     excluded = false;
-    if (!encloseSystem(threadEvaluators(in_.system), std::span<const S>(centre),
-                       std::span<const S>(radius), std::span<const S>(level_),
-                       std::span<const int>(all), t.jacobian, fy, excluded, false))
-      return false;
-    if (fixed < 0) return t.test.graph(t.jacobian, all);
-    return excluded || t.test.graph(t.jacobian, freeAxes(fixed));
-  }
-
-  /// J(X) over `box` (m x n, row-major) from midpoint-radius runs of the programs into
-  /// `jacobian`; false when a run fails.
-  bool leafJacobian(const Box<S>& box, std::vector<Interval<S>>& jacobian) const {
-    thread_local std::vector<S> centre, radius;
-    thread_local std::vector<Interval<S>> fy;
-    thread_local std::vector<int> all;
-    centreAndRadius(box, centre, radius);
-    all.resize(n_);
-    std::iota(all.begin(), all.end(), 0);
-    bool excluded = false;
     return encloseSystem(threadEvaluators(in_.system), std::span<const S>(centre),
                          std::span<const S>(radius), std::span<const S>(level_),
                          std::span<const int>(all), jacobian, fy, excluded, false);
@@ -1639,7 +1634,8 @@ class AdaptiveCrossing {
       // J over the whole leaf encloses J over each face: one evaluation proves most faces
       // (a face's own evaluation where it does not).
       thread_local std::vector<Interval<S>> whole;
-      const bool wholeKnown = byEvaluation_ && leafJacobian(box, whole);
+      bool wholeExcluded = false;
+      const bool wholeKnown = byEvaluation_ && evaluatedJacobian(box, whole, wholeExcluded);
       int failed = -1;
       for (int a = 0; a < n_ && failed < 0; ++a) {
         if (wholeKnown && t.test.graph(std::span<const Interval<S>>(whole), freeAxes(a))) continue;

@@ -77,6 +77,26 @@ void buildLeafModel(std::vector<MidRadEvaluator<S>>& evaluators, const Box<S>& b
   model.valid = true;
 }
 
+/// Adds the fixed axes' terms J_ij(X) d_j of equation i on the face of `box` (the model's
+/// leaf) that fixes `axes` at the ends `side` (bit t: upper end of axes[t]) to an enclosure
+/// kept as centre, magnitude (sum of the absolute terms, for the rounding bound) and radius.
+template <class S>
+void addFixedTerms(const LeafModel<S>& model, std::size_t i, const Box<S>& box,
+                   std::span<const int> axes, int side, S& centre, S& magnitude, S& radius) {
+  using std::abs;
+  const std::size_t n = model.centre.size();
+  const S eps = 2 * ScalarTraits<S>::epsilon();
+  for (std::size_t t = 0; t < axes.size(); ++t) {
+    const auto j = static_cast<std::size_t>(axes[t]);
+    const S x = (side >> t) & 1 ? box.hi[j] : box.lo[j];
+    const S d = x - model.centre[j];  // rounded: off by at most eps |d|
+    const S g = model.gradMid[i * n + j], r = model.gradRad[i * n + j];
+    centre += g * d;
+    magnitude += abs(g * d);
+    radius += r * abs(d) + (abs(g) + r) * eps * abs(d);
+  }
+}
+
 /// True when the model proves that some F_i - level_i has no zero on the face of `box` (the model's
 /// leaf) that fixes `axes` (its first k entries) at the ends `side` (bit t: upper end of axes[t]).
 /// The fixed axes contribute J_ij(X) d_j with d_j the face's offset from the centre, the free ones
@@ -88,7 +108,6 @@ bool faceExcluded(const LeafModel<S>& model, const Box<S>& box, std::span<const 
   using std::abs;
   if (!model.valid) return false;
   const std::size_t m = model.valueMid.size(), n = model.centre.size();
-  const S eps = 2 * ScalarTraits<S>::epsilon();
   const S gamma = S(8 * (n + m + 8)) * ScalarTraits<S>::epsilon();
   const S tiny = S(std::numeric_limits<double>::min());
   for (std::size_t i = 0; i < m; ++i) {
@@ -96,18 +115,10 @@ bool faceExcluded(const LeafModel<S>& model, const Box<S>& box, std::span<const 
     const S* gr = &model.gradRad[i * n];
     S centre = model.valueMid[i], magnitude = abs(centre), radius = model.valueRad[i];
     for (std::size_t j = 0; j < n; ++j) {
-      int t = 0;
-      while (t < static_cast<int>(axes.size()) && axes[t] != static_cast<int>(j)) ++t;
-      if (t == static_cast<int>(axes.size())) {
-        radius += (abs(gm[j]) + gr[j]) * model.radius[j];
-        continue;
-      }
-      const S x = (side >> t) & 1 ? box.hi[j] : box.lo[j];
-      const S d = x - model.centre[j];  // rounded: off by at most eps |d|
-      centre += gm[j] * d;
-      magnitude += abs(gm[j] * d);
-      radius += gr[j] * abs(d) + (abs(gm[j]) + gr[j]) * eps * abs(d);
+      if (std::find(axes.begin(), axes.end(), static_cast<int>(j)) != axes.end()) continue;
+      radius += (abs(gm[j]) + gr[j]) * model.radius[j];
     }
+    addFixedTerms(model, i, box, axes, side, centre, magnitude, radius);
     magnitude += radius;
     if (abs(centre) > radius + gamma * magnitude + tiny) return true;
   }
@@ -193,7 +204,6 @@ bool faceKrawczykExcludes(const LeafModel<S>& model, const FacePreconditioner<S>
   using std::abs;
   if (!model.valid || !pre.valid) return false;
   const std::size_t m = model.valueMid.size(), n = model.centre.size();
-  const S eps = 2 * ScalarTraits<S>::epsilon();
   const S gamma = S(8 * (n + m + 8)) * ScalarTraits<S>::epsilon();
   const S tiny = S(std::numeric_limits<double>::min());
   // g(0) = F(c) - level + J_fixed(X) d_fixed: centre, radius and magnitude per equation.
@@ -201,15 +211,7 @@ bool faceKrawczykExcludes(const LeafModel<S>& model, const FacePreconditioner<S>
   gc.resize(m), gr.resize(m), gm.resize(m);
   for (std::size_t i = 0; i < m; ++i) {
     S centre = model.valueMid[i], magnitude = abs(centre), radius = model.valueRad[i];
-    for (std::size_t t = 0; t < axes.size(); ++t) {
-      const std::size_t j = static_cast<std::size_t>(axes[t]);
-      const S x = (side >> t) & 1 ? box.hi[j] : box.lo[j];
-      const S d = x - model.centre[j];  // rounded: off by at most eps |d|
-      const S g = model.gradMid[i * n + j], r = model.gradRad[i * n + j];
-      centre += g * d;
-      magnitude += abs(g * d);
-      radius += r * abs(d) + (abs(g) + r) * eps * abs(d);
-    }
+    addFixedTerms(model, i, box, axes, side, centre, magnitude, radius);
     gc[i] = centre;
     gr[i] = radius + gamma * (magnitude + radius);
     gm[i] = magnitude + gr[i];
