@@ -41,6 +41,37 @@ namespace fs = std::filesystem;
 
 namespace {
 
+/// The names x0 .. x{n-1}.
+std::vector<std::string> variableNames(int n) {
+  std::vector<std::string> names;
+  for (int j = 0; j < n; ++j) names.push_back("x" + std::to_string(j));
+  return names;
+}
+
+/// Appends `count` hyperplanes a.x - a.p through p, with integer a in [-3, 3] drawn from rng,
+/// to `equations` (every literal exact for p on the 1/64 grid: offsets printed with 17
+/// digits); their rows a into `rows` (count x n) when given.
+void planesThrough(const std::vector<double>& p, int count, std::mt19937& rng,
+                   const std::vector<std::string>& names, std::vector<ndc::Expression>& equations,
+                   Eigen::MatrixXd* rows = nullptr) {
+  std::uniform_int_distribution<int> coefficient(-3, 3);
+  const auto n = static_cast<int>(p.size());
+  if (rows) rows->resize(count, n);
+  for (int i = 0; i < count; ++i) {
+    std::ostringstream plane;
+    plane.precision(17);
+    double offset = 0;
+    for (int j = 0; j < n; ++j) {
+      const int a = coefficient(rng);
+      if (rows) (*rows)(i, j) = a;
+      plane << (j ? " + " : "") << a << "*" << names[j];
+      offset += a * p[j];
+    }
+    plane << " - (" << offset << ")";
+    equations.push_back(ndc::Expression::parse(plane.str(), names));
+  }
+}
+
 using ndc::Problem;
 using ndc::RunResult;
 using ndc::Settings;
@@ -216,13 +247,12 @@ TEMPLATE_TEST_CASE("crossing: a leaf's affine model never excludes a face throug
   ndc::test::PrecisionScope<TestType> scope(128);
   using S = TestType;
   std::mt19937 rng(23);
-  std::uniform_int_distribution<int> grid(-64, 64), coefficient(-3, 3);
+  std::uniform_int_distribution<int> grid(-64, 64);
   std::uniform_real_distribution<double> unit(0, 1);
   int faces = 0;
   for (int n = 3; n <= 8; ++n) {
     for (int system = 0; system < 6; ++system) {
-      std::vector<std::string> names;
-      for (int j = 0; j < n; ++j) names.push_back("x" + std::to_string(j));
+      const std::vector<std::string> names = variableNames(n);
       std::vector<double> p(n);
       double radius2 = 0;
       for (int j = 0; j < n; ++j) {
@@ -234,18 +264,7 @@ TEMPLATE_TEST_CASE("crossing: a leaf's affine model never excludes a face throug
       for (int j = 0; j < n; ++j) sphere << (j ? " + " : "") << names[j] << "^2";
       sphere << " - " << radius2;
       std::vector<ndc::Expression> equations{ndc::Expression::parse(sphere.str(), names)};
-      for (int i = 0; i < n - 3; ++i) {
-        std::ostringstream plane;
-        plane.precision(17);
-        double offset = 0;
-        for (int j = 0; j < n; ++j) {
-          const int a = coefficient(rng);
-          plane << (j ? " + " : "") << a << "*" << names[j];
-          offset += a * p[j];
-        }
-        plane << " - (" << offset << ")";
-        equations.push_back(ndc::Expression::parse(plane.str(), names));
-      }
+      planesThrough(p, n - 3, rng, names, equations);
       std::vector<ndc::MidRadEvaluator<S>> evaluators;
       for (const ndc::Expression& e : equations) evaluators.emplace_back(e.sharedTape());
       const std::vector<S> level(equations.size(), S(0));
@@ -292,34 +311,23 @@ TEMPLATE_TEST_CASE("crossing: the Krawczyk test of a leaf's faces decides linear
   // point of the 1/64 grid (every literal exact). On a face of a leaf the system is square and
   // the affine model exact, so the face holds a zero exactly when the solution q of the face's
   // linear system lies in the face: the test must exclude every face whose q lies outside by
-  // more than 1% of the width and none whose q lies inside. Single equations (faceExcluded)
-  // cannot decide most of the faces near the flat.
+  // more than 1% of the width and none whose q lies inside, and some faces it excludes must be
+  // ones that no single equation excludes (faceExcluded).
   ndc::test::PrecisionScope<TestType> scope(128);
   using S = TestType;
   std::mt19937 rng(29);
-  std::uniform_int_distribution<int> grid(-64, 64), coefficient(-3, 3);
+  std::uniform_int_distribution<int> grid(-64, 64);
   std::uniform_real_distribution<double> unit(0, 1);
   int outside = 0, inside = 0, onlyJointly = 0;
   for (int n = 3; n <= 8; ++n) {
     const int m = n - 2;
     for (int system = 0; system < 6; ++system) {
-      std::vector<std::string> names;
-      for (int j = 0; j < n; ++j) names.push_back("x" + std::to_string(j));
+      const std::vector<std::string> names = variableNames(n);
       std::vector<double> p(n);
       for (int j = 0; j < n; ++j) p[j] = grid(rng) / 64.0;
-      Eigen::MatrixXd a(m, n);
+      Eigen::MatrixXd a;
       std::vector<ndc::Expression> equations;
-      for (int i = 0; i < m; ++i) {
-        std::ostringstream plane;
-        double offset = 0;
-        for (int j = 0; j < n; ++j) {
-          a(i, j) = coefficient(rng);
-          plane << (j ? " + " : "") << a(i, j) << "*" << names[j];
-          offset += a(i, j) * p[j];
-        }
-        plane << " - (" << offset << ")";
-        equations.push_back(ndc::Expression::parse(plane.str(), names));
-      }
+      planesThrough(p, m, rng, names, equations, &a);
       std::vector<ndc::MidRadEvaluator<S>> evaluators;
       for (const ndc::Expression& e : equations) evaluators.emplace_back(e.sharedTape());
       const std::vector<S> level(equations.size(), S(0));
