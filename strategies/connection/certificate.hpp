@@ -37,9 +37,11 @@ class GraphTest {
  public:
   GraphTest(int n, int m) : n_(n), m_(m) {}
 
-  /// Whether some m of the columns `axes` of `jacobian` (m x n, row-major) form a regular
-  /// block. Tries the pivot columns of the midpoint matrix first, then every other choice
-  /// (at most C(a, a - m) with a - m <= 2).
+  /// Whether M_c ∩ box is proven a graph over the columns `axes` of `jacobian` (m x n,
+  /// row-major): some m of them form a regular block, or [J; T^T] is regular over the
+  /// midpoint tangent space T (tangentGraph). Tries the pivot columns of the midpoint matrix
+  /// first, then the tangent space, then every other block (at most C(a, a - m) with
+  /// a - m <= 2).
   bool graph(std::span<const Interval<S>> jacobian, std::span<const int> axes);
 
  private:
