@@ -184,7 +184,9 @@ class FaceSolver {
     proven_ = true;
     withinRounding_ = false;
     boxes_ = 0;
-    return evaluationRecurse(face, ends, 0, roots);
+    faceWidth_.resize(m_);
+    for (int j = 0; j < m_; ++j) faceWidth_[j] = face.hi[j] - face.lo[j];
+    return evaluationRecurse(face, face, ends, 0, roots);
   }
 
   /// Whether every decision of the last solve is a proof: exclusions by coefficient signs
@@ -255,34 +257,107 @@ class FaceSolver {
     //! [crossing-face]
   }
 
-  /// One box of solveByEvaluation: false when it is left undecided.
-  bool evaluationRecurse(const Box<S>& box, const FaceEnds& ends, int depth,
+  /// One box of solveByEvaluation: false when it is left undecided. `owner` is the half-open
+  /// part of the face the box answers for (its crossings are the roots inside it); `search`,
+  /// inside it, holds all of owner's roots: the Krawczyk operator contracts it, since every
+  /// root in X lies in K(X), before it is halved.
+  bool evaluationRecurse(const Box<S>& owner, Box<S> search, const FaceEnds& ends, int depth,
                          std::vector<std::vector<S>>& roots) {
-    // Exclusion, J(X) and F(mid X) from midpoint-radius runs of the programs.
-    bool excluded = false;
-    if (!enclose(box, true, excluded)) return false;  // a value that is not finite
-    if (excluded) return true;
-    const Krawczyk k = krawczyk(box, &fy_);
-    if (k == Krawczyk::kNone) return true;
-    std::vector<S> root;
-    const bool found = newton(box, root) && inside(box, ends, root);
-    if (found && (k == Krawczyk::kUnique || evaluatedAround(root, box) == Krawczyk::kUnique)) {
-      roots.push_back(fullPoint(root));
-      return true;
+    for (int round = 0;; ++round) {
+      // Exclusion, J(X) and F(mid X) from midpoint-radius runs of the programs.
+      bool excluded = false;
+      if (!enclose(search, true, excluded)) return false;  // a value that is not finite
+      if (excluded) return true;
+      const Krawczyk k = krawczyk(search, &fy_);
+      if (k == Krawczyk::kNone) return true;
+      if (k == Krawczyk::kUnique) {
+        // One root in X, none elsewhere in owner: Newton from mid X finds it.
+        std::vector<S> root;
+        if (!newton(search, root) || !inside(owner, ends, root)) return false;
+        roots.push_back(fullPoint(root));
+        return true;
+      }
+      // Contraction: X ∩ K(X) holds every root of X; keep it while it shrinks X at least as
+      // much as a halving would.
+      Box<S> contracted = search;
+      const bool shrinks = contract(contracted);
+      if (narrowImage(search) && inflatedRoot(owner, ends, roots)) return true;
+      if (round >= kContractions || !shrinks) break;
+      search = std::move(contracted);
     }
-    if (k == Krawczyk::kUnique || depth >= kEvaluationDepth * m_ || ++boxes_ > kEvaluationBoxes)
-      return false;
-    // Halve along the free axes in turn (half-open children), as recurse does.
-    const int axis = depth % m_;
-    const S mid = (box.lo[axis] + box.hi[axis]) / 2;
-    Box<S> lower = box, upper = box;
-    lower.hi[axis] = mid;
-    upper.lo[axis] = mid;
+    if (depth >= kEvaluationDepth * m_ || ++boxes_ > kEvaluationBoxes) return false;
+    // Halve along the free axis widest relative to the face (half-open children).
+    int axis = 0;
+    for (int j = 1; j < m_; ++j) {
+      if ((search.hi[j] - search.lo[j]) * faceWidth_[axis] >
+          (search.hi[axis] - search.lo[axis]) * faceWidth_[j])
+        axis = j;
+    }
+    const S mid = (search.lo[axis] + search.hi[axis]) / 2;
+    Box<S> lowerOwner = owner, upperOwner = owner, lower = search, upper = search;
+    lowerOwner.hi[axis] = lower.hi[axis] = mid;
+    upperOwner.lo[axis] = upper.lo[axis] = mid;
     FaceEnds lowerEnds = ends, upperEnds = ends;
     lowerEnds.upper[axis] = false;
     upperEnds.lower[axis] = false;
-    return evaluationRecurse(lower, lowerEnds, depth + 1, roots) &&
-           evaluationRecurse(upper, upperEnds, depth + 1, roots);
+    return evaluationRecurse(lowerOwner, std::move(lower), lowerEnds, depth + 1, roots) &&
+           evaluationRecurse(upperOwner, std::move(upper), upperEnds, depth + 1, roots);
+  }
+
+  /// Whether K(X) from the last krawczyk() on X is narrower than a quarter of X on every axis,
+  /// as it is near a regular root, or at most roundingWidth (contraction has converged there).
+  bool narrowImage(const Box<S>& x) const {
+    if (kLower_.empty()) return false;
+    for (int j = 0; j < m_; ++j) {
+      const S width = kUpper_[j] - kLower_[j];
+      if (!(width <= (x.hi[j] - x.lo[j]) / 4 || width <= roundingWidth(j))) return false;
+    }
+    return true;
+  }
+
+  /// A width on free axis j at which rounding in F(y) dominates K(X): 1024 ulps of the face's
+  /// coordinates.
+  S roundingWidth(int j) const {
+    using std::abs;
+    const S scale = std::max<S>(abs(kLower_[j]), abs(kUpper_[j])) + faceWidth_[j];
+    return S(1024) * ScalarTraits<S>::epsilon() * scale;
+  }
+
+  /// Epsilon-inflation (Rump): Z, K(X) widened by its width and roundingWidth on each side,
+  /// holds every root of X but, unlike X ∩ K(X), has a root near X's boundary inside it; K(Z)
+  /// inside int Z proves Z's one root, which Newton finds, and so X's only root (kept when it
+  /// lies in owner, the neighbour's otherwise). True when that decides X; K(X) from the last
+  /// krawczyk() on X.
+  bool inflatedRoot(const Box<S>& owner, const FaceEnds& ends, std::vector<std::vector<S>>& roots) {
+    Box<S> z{kLower_, kUpper_};
+    for (int j = 0; j < m_; ++j) {
+      const S r = (z.hi[j] - z.lo[j]) + roundingWidth(j);
+      z.lo[j] -= r;
+      z.hi[j] += r;
+    }
+    bool excluded = false;
+    if (!enclose(z, false, excluded) || krawczyk(z, &fy_) != Krawczyk::kUnique) return false;
+    std::vector<S> root;
+    if (!newton(z, root) || !insideClosed(z, root)) return false;
+    if (inside(owner, ends, root)) roots.push_back(fullPoint(root));
+    return true;
+  }
+
+  /// X <- X ∩ K(X) with K from the last krawczyk() on X; true when the volume at least halved.
+  bool contract(Box<S>& x) const {
+    if (kLower_.empty()) return false;  // J(mid X) singular: no operator
+    S ratio = 1;
+    for (int j = 0; j < m_; ++j) {
+      const S lo = std::max<S>(x.lo[j], kLower_[j]), hi = std::min<S>(x.hi[j], kUpper_[j]);
+      const S width = x.hi[j] - x.lo[j];
+      if (width > 0) ratio *= (hi - lo) / width;
+    }
+    if (!(ratio <= S(0.5))) return false;
+    for (int j = 0; j < m_; ++j) {
+      x.lo[j] = std::max<S>(x.lo[j], kLower_[j]);
+      x.hi[j] = std::min<S>(x.hi[j], kUpper_[j]);
+    }
+    return true;
   }
 
   /// Encloses, over the face box X, J(X) into jx_ and F(y) - c at its centre y into fy_ (y as
@@ -300,14 +375,6 @@ class FaceSolver {
     return encloseSystem(threadEvaluators(system_), std::span<const S>(centre_),
                          std::span<const S>(radius_), std::span<const S>(level_),
                          std::span<const int>(free_), jx_, fy_, excluded, stopWhenExcluded);
-  }
-
-  /// krawczykAround with the midpoint-radius enclosures of enclose().
-  Krawczyk evaluatedAround(const std::vector<S>& root, const Box<S>& face) {
-    const Box<S> box = aroundRoot(root, face);
-    bool excluded = false;
-    if (!enclose(box, false, excluded)) return Krawczyk::kUnknown;
-    return krawczyk(box, &fy_);
   }
 
   /// m = 1 (hypersurfaces, k = n - 1): the face is a grid edge, and the parity of its roots is
@@ -601,6 +668,7 @@ class FaceSolver {
       for (int j = 0; j < m_; ++j) jy(i, j) = jacobian_[std::size_t(i) * n_ + free_[j]];
     }
     Eigen::FullPivLU<Matrix<S>> lu(jy);
+    kLower_.clear(), kUpper_.clear();  // no operator (contract() needs one)
     if (lu.rank() < m_) return Krawczyk::kUnknown;
     const Matrix<S> inverse = lu.inverse();
     // F(y) by interval evaluation at the point (unless given), so its rounding is enclosed.
@@ -673,6 +741,9 @@ class FaceSolver {
   /// handles what evaluation alone cannot decide (tangencies, roots within rounding).
   static constexpr int kEvaluationDepth = 3;
   static constexpr long kEvaluationBoxes = 64;
+  /// Krawczyk contractions of one box before it is halved.
+  static constexpr int kContractions = 8;
+  std::vector<S> faceWidth_;  ///< solveByEvaluation's face widths, to pick the axis to halve
 };
 
 /// The m x n Jacobian of the system at x.
