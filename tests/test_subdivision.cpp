@@ -672,3 +672,92 @@ TEST_CASE("subdivision timings", "[.][subdivision-timing]") {
     }
   }
 }
+
+TEMPLATE_TEST_CASE("linearized bounding decides boxes around 2-flats exactly", "[subdivision]",
+                   NDC_SCALARS) {
+  // Generated 2-flats in R^4..R^8: n - 2 hyperplanes with integer coefficients in [-3, 3]
+  // through a point q of the 1/64 grid (every literal exact, so the linearization is the flat
+  // itself up to rounding), and boxes of dyadic widths at dyadic offsets from q. The truth
+  // comes from the flat's parametrisation x = q + U t: the box is 2 n half-planes in the plane
+  // of t, and the flat meets it iff some point where two of their lines cross satisfies all of
+  // them. Boxes the flat meets with the half-planes tightened by 1e-7 w must be kept, boxes it
+  // misses with them loosened by as much must be discarded: the planar kernel test (k = 2) is
+  // exact, where propagating the constraints over boxes of t leaves corners undecided.
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  std::mt19937 rng(29);
+  std::uniform_int_distribution<int> coefficient(-3, 3), grid(-64, 64), offset(-12, 4);
+  int kept = 0, discarded = 0;
+  for (int n = 4; n <= 8; ++n) {
+    std::vector<std::string> names;
+    for (int j = 0; j < n; ++j) names.push_back("x" + std::to_string(j));
+    for (int flat = 0; flat < 8; ++flat) {
+      std::vector<double> q(n);
+      for (double& v : q) v = grid(rng) / 64.0;
+      Eigen::MatrixXd a(n - 2, n);
+      std::ostringstream toml;
+      toml.precision(17);
+      toml << "name = \"flat\"\nvariables = [";
+      for (int j = 0; j < n; ++j) toml << (j ? ", " : "") << '"' << names[j] << '"';
+      toml << "]\ndomain = [";
+      for (int j = 0; j < n; ++j) toml << (j ? ", " : "") << "[-2, 2]";
+      toml << "]\nequations = [";
+      for (int i = 0; i < n - 2; ++i) {
+        double c = 0;
+        toml << (i ? ", " : "") << '"';
+        for (int j = 0; j < n; ++j) {
+          a(i, j) = coefficient(rng);
+          toml << (j ? " + " : "") << "(" << a(i, j) << ")*" << names[j];
+          c -= a(i, j) * q[j];
+        }
+        toml << " + (" << c << ")\"";
+      }
+      toml << "]\n";
+      const Eigen::FullPivLU<Eigen::MatrixXd> lu(a);
+      if (lu.rank() < n - 2) continue;
+      const Eigen::MatrixXd u = lu.kernel();  // n x 2
+      const Problem problem = ndc::parseProblem(toml.str(), "flat.toml");
+      const ndc::LinearizedBounding<S> bounding(problem, problem.domainAs<S>());
+      for (int trial = 0; trial < 60; ++trial) {
+        const double w = std::ldexp(1.0, -3 - 2 * static_cast<int>(rng() % 3));
+        std::vector<double> lo(n), hi(n);
+        for (int j = 0; j < n; ++j) lo[j] = q[j] + w * offset(rng) / 8, hi[j] = lo[j] + w;
+        // Whether the flat meets the box with its half-planes moved out by `slack`.
+        const auto meets = [&](double slack) {
+          // Half-planes g . t <= r: U_j t <= hi_j - q_j + slack, -U_j t <= q_j - lo_j + slack.
+          std::vector<Eigen::Vector2d> g;
+          std::vector<double> r;
+          for (int j = 0; j < n; ++j) {
+            g.emplace_back(u(j, 0), u(j, 1)), r.push_back(hi[j] - q[j] + slack);
+            g.emplace_back(-u(j, 0), -u(j, 1)), r.push_back(q[j] - lo[j] + slack);
+          }
+          const auto inside = [&](const Eigen::Vector2d& t) {
+            for (std::size_t h = 0; h < g.size(); ++h) {
+              if (g[h].dot(t) > r[h] + 1e-12) return false;
+            }
+            return true;
+          };
+          for (std::size_t h = 0; h < g.size(); ++h) {
+            for (std::size_t l = h + 1; l < g.size(); ++l) {
+              Eigen::Matrix2d m;
+              m << g[h].transpose(), g[l].transpose();
+              if (std::abs(m.determinant()) < 1e-12) continue;
+              if (inside(m.inverse() * Eigen::Vector2d(r[h], r[l]))) return true;
+            }
+          }
+          return false;
+        };
+        const double margin = 1e-7 * w;
+        const bool surely = meets(-margin), maybe = meets(margin);
+        if (surely != maybe) continue;  // within the margin of touching: no robust answer
+        ndc::Box<S> box{std::vector<S>(n), std::vector<S>(n)};
+        for (int j = 0; j < n; ++j) box.lo[j] = S(lo[j]), box.hi[j] = S(hi[j]);
+        INFO("n = " << n << ", flat " << flat << ", trial " << trial);
+        CHECK(bounding.linearizationExcludes(box) == !surely);
+        ++(surely ? kept : discarded);
+      }
+    }
+  }
+  CHECK(kept >= 100);
+  CHECK(discarded >= 100);
+}

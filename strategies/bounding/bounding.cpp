@@ -196,6 +196,9 @@ LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& 
   b_.resize(n);
   tlo_.resize(k);
   thi_.resize(k);
+  // 7c's polygons: 4 corners, at most one vertex more per clip, 2 n clips.
+  polygon_.reserve(2 * (4 + 2 * std::size_t(n)));
+  clipped_.reserve(2 * (4 + 2 * std::size_t(n)));
   // Affine equations have a constant gradient: enclose it once, by the outward-rounded interval
   // gradient over the domain (the constant up to the rounding of the literals).
   affine_.assign(m, 0);
@@ -272,7 +275,8 @@ bool LinearizedBounding<S>::linearisedSystemExcludes(const S& hh) const {
   if (rowTestExcludes(migSq)) return true;       // 5
   if (ballTestExcludes(migSq, hh)) return true;  // 6
   kernelBounds();                                // 7
-  return kernelPropagationExcludes();
+  if (kernelPropagationExcludes()) return true;
+  return n_ - m_ == 2 && kernelPolygonExcludes();
 }
 
 template <class S>
@@ -550,6 +554,49 @@ bool LinearizedBounding<S>::narrowKernelBox(int j, int p) const {
   if (tl > tlo_[p]) tlo_[p] = tl;
   if (th < thi_[p]) thi_[p] = th;
   return tlo_[p] > thi_[p];
+}
+
+template <class S>
+bool LinearizedBounding<S>::kernelPolygonExcludes() const {
+  // For k = 2 the solutions t form the intersection of n strips |N_j t - a_j| <= b_j, a convex
+  // polygon that propagation over boxes only bounds (it misses a corner the strips cut off
+  // together). Clip the propagated box by each strip's two half-planes (Sutherland-Hodgman);
+  // every half-plane is relaxed by 4 times narrowKernelBox's slack, so the relaxed polygon
+  // holds a disc of radius about that slack around each true solution, which the clipping's
+  // rounding (each new vertex a convex combination of two old ones) cannot lose.
+  using std::abs;
+  const int n = n_;
+  const S& tol = tol_;
+  const S reach = std::max({abs(tlo_[0]), abs(thi_[0]), abs(tlo_[1]), abs(thi_[1])});
+  polygon_ = {tlo_[0], tlo_[1], thi_[0], tlo_[1], thi_[0], thi_[1], tlo_[0], thi_[1]};
+  // Keeps the part of the polygon where u . t <= bound.
+  const auto clip = [&](const S& u0, const S& u1, const S& bound) {
+    clipped_.clear();
+    const std::size_t count = polygon_.size() / 2;
+    for (std::size_t v = 0; v < count; ++v) {
+      const std::size_t w = (v + 1) % count;
+      const S& x0 = polygon_[2 * v];
+      const S& y0 = polygon_[2 * v + 1];
+      const S& x1 = polygon_[2 * w];
+      const S& y1 = polygon_[2 * w + 1];
+      const S s0 = u0 * x0 + u1 * y0 - bound, s1 = u0 * x1 + u1 * y1 - bound;
+      if (s0 <= 0) clipped_.insert(clipped_.end(), {x0, y0});
+      if ((s0 < 0 && s1 > 0) || (s0 > 0 && s1 < 0)) {
+        const S f = s0 / (s0 - s1);
+        clipped_.insert(clipped_.end(), {x0 + f * (x1 - x0), y0 + f * (y1 - y0)});
+      }
+    }
+    polygon_.swap(clipped_);
+    return !polygon_.empty();
+  };
+  for (int j = 0; j < n; ++j) {
+    const S& u0 = nul(j, 0);
+    const S& u1 = nul(j, 1);
+    if (u0 == 0 && u1 == 0) continue;  // decided by the propagation
+    const S slack = 4 * tol * (abs(a_[j]) + b_[j] + (abs(u0) + abs(u1)) * reach);
+    if (!clip(u0, u1, a_[j] + b_[j] + slack) || !clip(-u0, -u1, b_[j] - a_[j] + slack)) return true;
+  }
+  return false;
 }
 
 // --- Factory -------------------------------------------------------------------------------------

@@ -207,6 +207,9 @@ class LinearizedBounding final {
   bool kernelPropagationExcludes() const;
   /// Narrows the box of t_p by the constraint of axis j; true when it becomes empty.
   bool narrowKernelBox(int j, int p) const;
+  /// 7c (k = 2): the exact test on the plane of t: the propagated box clipped by the 2 n
+  /// half-planes of the axes' strips; true when nothing is left.
+  bool kernelPolygonExcludes() const;
   /// Q1 (row space of J_c) and N = Q2 (its kernel) as n x m and n x k matrices.
   const S& q1(int row, int col) const {
     return q_[static_cast<std::size_t>(col) * static_cast<std::size_t>(n_) +
@@ -229,6 +232,7 @@ class LinearizedBounding final {
   mutable std::vector<S> q_;                         // n x n orthogonal factor, column-major
   mutable std::vector<S> p_, pj_, pjAbs_, mig_;      // P (m x m), P J_c and |P| |J_c| (m x n)
   mutable std::vector<S> pinv_, a_, b_, tlo_, thi_;  // J^+ (n x m), centre/bound per axis, t box
+  mutable std::vector<S> polygon_, clipped_;         // 7c: vertices (t_0, t_1) interleaved
 };
 
 static_assert(BoundingStrategy<BernsteinBounding<double>>);
