@@ -64,27 +64,22 @@ Planted planted(int n, bool graph, std::mt19937& rng) {
     for (int i = 0; i < m; ++i) b[i] = small(rng), s[i] = axis(rng), t[i] = axis(rng);
     for (int i = 0; graph && i < m; ++i) b[i] = i == 0 ? 1 : b[i], s[i] = t[i] = 0;
     out.isolation = 1 / inverseNorm;  // |b| <= 1
-    std::ostringstream toml;
-    toml.precision(17);
-    toml << "name = \"planted\"\nvariables = [";
-    for (int j = 0; j < n; ++j) toml << (j ? ", " : "") << '"' << names[j] << '"';
-    toml << "]\ndomain = [";
-    for (int j = 0; j < n; ++j) toml << (j ? ", " : "") << "[-2, 2]";
-    toml << "]\nequations = [";
+    std::vector<std::string> equations;
     for (int i = 0; i < m; ++i) {
       // sum_j a_ij x_j + b_i (x_s x_t - p_t x_s - p_s x_t) + c_i, zero at p.
       const double ps = out.p[s[i]], pt = out.p[t[i]];
       double c = b[i] * ps * pt;
-      toml << (i ? ", " : "") << '"';
+      std::ostringstream e;
+      e.precision(17);
       for (int j = 0; j < n; ++j) {
-        toml << (j ? " + " : "") << "(" << a(i, j) << ")*" << names[j];
+        e << (j ? " + " : "") << "(" << a(i, j) << ")*" << names[j];
         c -= a(i, j) * out.p[j];
       }
-      toml << " + (" << b[i] << ")*(" << names[s[i]] << "*" << names[t[i]] << " - (" << pt << ")*"
-           << names[s[i]] << " - (" << ps << ")*" << names[t[i]] << ") + (" << c << ")\"";
+      e << " + (" << b[i] << ")*(" << names[s[i]] << "*" << names[t[i]] << " - (" << pt << ")*"
+        << names[s[i]] << " - (" << ps << ")*" << names[t[i]] << ") + (" << c << ")";
+      equations.push_back(e.str());
     }
-    toml << "]\n";
-    out.problem = ndc::parseProblem(toml.str(), "planted.toml");
+    out.problem = ndc::test::makeProblem(n, equations, 2);
     return out;
   }
 }

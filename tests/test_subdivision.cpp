@@ -689,34 +689,27 @@ TEMPLATE_TEST_CASE("linearized bounding decides boxes around 2-flats exactly", "
   std::uniform_int_distribution<int> coefficient(-3, 3), grid(-64, 64), offset(-12, 4);
   int kept = 0, discarded = 0;
   for (int n = 4; n <= 8; ++n) {
-    std::vector<std::string> names;
-    for (int j = 0; j < n; ++j) names.push_back("x" + std::to_string(j));
     for (int flat = 0; flat < 8; ++flat) {
       std::vector<double> q(n);
       for (double& v : q) v = grid(rng) / 64.0;
       Eigen::MatrixXd a(n - 2, n);
-      std::ostringstream toml;
-      toml.precision(17);
-      toml << "name = \"flat\"\nvariables = [";
-      for (int j = 0; j < n; ++j) toml << (j ? ", " : "") << '"' << names[j] << '"';
-      toml << "]\ndomain = [";
-      for (int j = 0; j < n; ++j) toml << (j ? ", " : "") << "[-2, 2]";
-      toml << "]\nequations = [";
+      std::vector<std::string> equations;
       for (int i = 0; i < n - 2; ++i) {
         double c = 0;
-        toml << (i ? ", " : "") << '"';
+        std::ostringstream e;
+        e.precision(17);
         for (int j = 0; j < n; ++j) {
           a(i, j) = coefficient(rng);
-          toml << (j ? " + " : "") << "(" << a(i, j) << ")*" << names[j];
+          e << (j ? " + " : "") << "(" << a(i, j) << ")*x" << j;
           c -= a(i, j) * q[j];
         }
-        toml << " + (" << c << ")\"";
+        e << " + (" << c << ")";
+        equations.push_back(e.str());
       }
-      toml << "]\n";
       const Eigen::FullPivLU<Eigen::MatrixXd> lu(a);
       if (lu.rank() < n - 2) continue;
       const Eigen::MatrixXd u = lu.kernel();  // n x 2
-      const Problem problem = ndc::parseProblem(toml.str(), "flat.toml");
+      const Problem problem = ndc::test::makeProblem(n, equations, 2);
       const ndc::LinearizedBounding<S> bounding(problem, problem.domainAs<S>());
       for (int trial = 0; trial < 60; ++trial) {
         const double w = std::ldexp(1.0, -3 - 2 * static_cast<int>(rng() % 3));
