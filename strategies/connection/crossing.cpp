@@ -210,6 +210,82 @@ struct FaceResult {
   std::int64_t degenerate = 0;  ///< roots within rounding of the face's boundary
 };
 
+/// A solved face as FaceStore keeps it: a FaceResult whose root lies in the store's pool.
+struct FaceRecord {
+  std::int64_t root = -1;       ///< offset of the first root's coordinates in the pool, or -1
+  std::int64_t degenerate = 0;  ///< as FaceResult
+  std::uint32_t kind = 0;       ///< which face of its leaf (AdaptiveCrossing::faceKind)
+  int roots = 0, degree = 0;
+  bool certain = true, proven = true, withinRounding = false;
+};
+
+/// The solved faces of every leaf, kept across the refinement's rounds. The walk solves the
+/// faces a leaf owns one after the other, so each leaf's records form one block of a flat
+/// array: keeping a face appends to it (nothing is allocated per face, nothing is hashed), and
+/// finding one scans its leaf's block (a few dozen records at most).
+template <class S>
+class FaceStore {
+ public:
+  explicit FaceStore(int n) : n_(n) {}
+
+  void clear() {
+    blocks_.clear();
+    records_.clear();
+    roots_.clear();
+  }
+
+  /// Face `kind` of `leaf`, or null.
+  const FaceRecord* find(std::int32_t leaf, std::uint32_t kind) const {
+    if (std::size_t(leaf) >= blocks_.size()) return nullptr;
+    const Block& b = blocks_[std::size_t(leaf)];
+    for (std::int64_t i = b.first; i < b.first + b.count; ++i) {
+      if (records_[std::size_t(i)].kind == kind) return &records_[std::size_t(i)];
+    }
+    return nullptr;
+  }
+
+  /// Keeps face `kind` of `leaf` (not kept yet). The pointer stays valid until the next add.
+  const FaceRecord* add(std::int32_t leaf, std::uint32_t kind, const FaceResult<S>& r) {
+    if (std::size_t(leaf) >= blocks_.size()) blocks_.resize(std::size_t(leaf) + 1);
+    Block& b = blocks_[std::size_t(leaf)];
+    const auto end = static_cast<std::int64_t>(records_.size());
+    if (b.count > 0 && b.first + b.count != end) {
+      // The leaf's block is not the last one (a face of an earlier round's leaf that it did
+      // not own then): move the block to the end, where it can grow.
+      records_.insert(records_.end(), records_.begin() + b.first,
+                      records_.begin() + b.first + b.count);
+      b.first = end;
+    } else if (b.count == 0) {
+      b.first = end;
+    }
+    FaceRecord kept{-1,       r.degenerate, kind,     r.roots,
+                    r.degree, r.certain,    r.proven, r.withinRounding};
+    if (!r.root.empty()) {
+      kept.root = static_cast<std::int64_t>(roots_.size());
+      roots_.insert(roots_.end(), r.root.begin(), r.root.end());
+    }
+    records_.push_back(kept);
+    ++b.count;
+    return &records_.back();
+  }
+
+  /// The root of a kept face (n coordinates; empty when it has none).
+  std::span<const S> root(const FaceRecord& r) const {
+    if (r.root < 0) return {};
+    return std::span<const S>(roots_).subspan(std::size_t(r.root), std::size_t(n_));
+  }
+
+ private:
+  struct Block {
+    std::int64_t first = 0;
+    std::int32_t count = 0;
+  };
+  int n_;
+  std::vector<Block> blocks_;  ///< per leaf
+  std::vector<FaceRecord> records_;
+  std::vector<S> roots_;
+};
+
 /// Why a leaf is not certified (docs/certificate.md); the names go to uncertified.csv.
 enum class Failure : std::uint8_t { kNone, kCrossing, kGraph, kFaceGraph, kLink };
 
@@ -246,7 +322,8 @@ class AdaptiveCrossing {
                    in.problem.roots.empty() ? 0 : in.problem.rootLevel),
         position_(in, grid_),
         graphTest_(grid_.n, grid_.n - in.k),
-        tree_(grid_, std::max(grid_.depth, in.refine ? in.maxLevel : grid_.depth)) {
+        tree_(grid_, std::max(grid_.depth, in.refine ? in.maxLevel : grid_.depth)),
+        faces_(grid_.n) {
     for (int a = 0; a < n_; ++a) {
       if (k_ == 1) fixedAxes_.push_back({a, -1});
       for (int b = a + 1; k_ == 2 && b < n_; ++b) fixedAxes_.push_back({a, b});
@@ -517,8 +594,6 @@ class AdaptiveCrossing {
     unprovenFaces_.clear();
     unprovenOf_.clear();
     unprovenOfEmpty_.clear();
-    prefetched_.clear();
-    prefetchFrom_ = prefetchEnd_ = 0;
     std::int64_t degenerate = 0;
     std::vector<std::int32_t> corner(n_), ci;
     std::array<Occupant, 4> around;
@@ -534,18 +609,17 @@ class AdaptiveCrossing {
       const int level = tree_.level(c);
       // A copy: touch leaves added below may move the tree's index storage.
       ci.assign(tree_.index(c).begin(), tree_.index(c).end());
-      const bool known = c >= prefetchFrom_ && c < prefetchEnd_;
+      const LeafFaces* known = prefetchedOf(c);
       const std::vector<OwnedFace> all = known ? std::vector<OwnedFace>() : ownedFaces(c);
-      for (const OwnedFace& f : known ? prefetched_[c].owned : all) {
+      for (const OwnedFace& f : known ? known->owned : all) {
         faceAround(ci, f, corner, around);
-        const std::uint64_t key = faceKey(c, f.a, f.side);
-        auto it = faces_.find(key);
-        if (it == faces_.end())
-          it = faces_.emplace(key, faceResult(c, f.a, f.side, key, ready)).first;
-        degenerate += addFace(it->second, around, level, corner, fixedAxes_[f.a]);
+        const std::uint32_t kind = faceKind(f.a, f.side);
+        const FaceRecord* r = faces_.find(c, kind);
+        if (!r) r = faces_.add(c, kind, faceResult(c, f.a, f.side, faceKey(c, f.a, f.side), ready));
+        degenerate += addFace(*r, around, level, corner, fixedAxes_[f.a]);
       }
     }
-    prefetched_.clear();
+    clearPrefetched();
     return degenerate;
   }
 
@@ -614,7 +688,12 @@ class AdaptiveCrossing {
     }
   }
 
-  /// The key of face (a, side) of leaf c in faces_.
+  /// Which face of its leaf (a, side) is, among the leaf's faces (FaceStore's kind).
+  std::uint32_t faceKind(std::size_t a, int side) const {
+    return static_cast<std::uint32_t>(a << k_) + static_cast<std::uint32_t>(side);
+  }
+
+  /// The key of face (a, side) of leaf c among all faces (prefetchLeaf's results).
   std::uint64_t faceKey(std::int32_t c, std::size_t a, int side) const {
     const auto faceTypes = static_cast<std::uint64_t>(fixedAxes_.size()) << k_;
     return static_cast<std::uint64_t>(c) * faceTypes + (a << k_) + std::uint64_t(side);
@@ -648,10 +727,10 @@ class AdaptiveCrossing {
   /// restrictTo(c), or its answer from prefetchFaces (then patches_ are not c's and `ready`
   /// stays false).
   bool restrictOnce(std::int32_t c, bool& ready) {
-    if (std::size_t(c) < prefetched_.size() && prefetched_[c].empty >= 0) {
+    if (const LeafFaces* known = prefetchedOf(c); known && known->empty >= 0) {
       bandEmpty_.resize(tree_.size(), 0);
-      bandEmpty_[c] = prefetched_[c].band;
-      return prefetched_[c].empty == 1;
+      bandEmpty_[c] = known->band;
+      return known->empty == 1;
     }
     ready = true;
     return restrictTo(c);
@@ -660,8 +739,8 @@ class AdaptiveCrossing {
   /// The solution of face (a, side) of leaf c: prefetchFaces's, or solved now.
   FaceResult<S> faceResult(std::int32_t c, std::size_t a, int side, std::uint64_t key,
                            bool& ready) {
-    if (std::size_t(c) < prefetched_.size()) {
-      for (auto& [at, result] : prefetched_[c].faces) {
+    if (LeafFaces* known = prefetchedOf(c)) {
+      for (auto& [at, result] : known->faces) {
         if (at == key) return std::move(result);
       }
     }
@@ -690,9 +769,7 @@ class AdaptiveCrossing {
   /// before and takes these answers instead of computing them, so nothing it does depends on
   /// the order in which the tasks ran.
   void prefetchFaces(std::int32_t from) {
-    // The previous window's slots are spent: free them (in parallel too).
-    parallelFor(std::size_t(prefetchEnd_ - prefetchFrom_),
-                [&](std::size_t i) { prefetched_[prefetchFrom_ + i] = LeafFaces{}; });
+    clearPrefetched();  // the previous window's slots are spent
     grow();
     const auto end = std::min(static_cast<std::int32_t>(tree_.size()), from + kPrefetchWindow);
     std::vector<std::int32_t> leaves;
@@ -700,11 +777,31 @@ class AdaptiveCrossing {
       if (tree_.active(c) && empty_[c] != 1) leaves.push_back(c);
     }
     const std::vector<const RootForms*> forms = rootFormsOf(leaves);
-    prefetched_.resize(tree_.size());
+    prefetched_.resize(kPrefetchWindow);
     prefetchFrom_ = from;
     prefetchEnd_ = end;
-    parallelFor(leaves.size(),
-                [&](std::size_t i) { prefetchLeaf(leaves[i], *forms[i], prefetched_[leaves[i]]); });
+    parallelFor(leaves.size(), [&](std::size_t i) {
+      prefetchLeaf(leaves[i], *forms[i], prefetched_[std::size_t(leaves[i] - from)]);
+    });
+  }
+
+  /// Leaf c's slot of prefetched_, or null when c is not in the current window.
+  LeafFaces* prefetchedOf(std::int32_t c) {
+    if (c < prefetchFrom_ || c >= prefetchEnd_) return nullptr;
+    return &prefetched_[std::size_t(c - prefetchFrom_)];
+  }
+
+  /// Empties the current window's slots (in parallel: they hold the faces' roots), keeping
+  /// their storage for the next window.
+  void clearPrefetched() {
+    parallelFor(std::size_t(prefetchEnd_ - prefetchFrom_), [&](std::size_t i) {
+      LeafFaces& slot = prefetched_[i];
+      slot.empty = -1;
+      slot.band = 0;
+      slot.faces.clear();
+      slot.owned.clear();
+    });
+    prefetchFrom_ = prefetchEnd_ = 0;
   }
 
   /// One task of prefetchFaces.
@@ -730,7 +827,7 @@ class AdaptiveCrossing {
     built.assign(fixedAxes_.size(), 0);
     for (const OwnedFace& f : out.owned) {
       const std::uint64_t key = faceKey(c, f.a, f.side);
-      if (faces_.count(key)) continue;
+      if (faces_.find(c, faceKind(f.a, f.side))) continue;
       const auto restricted = [&]() -> const std::vector<Bernstein<S>>& {
         prepare();
         return patches;
@@ -751,7 +848,7 @@ class AdaptiveCrossing {
 
   /// Records a solved face: flags its leaves when the face is not proven, and adds its
   /// polygon (|degree| copies) when it is crossed. Returns its degenerate crossings.
-  std::int64_t addFace(const FaceResult<S>& r, std::array<Occupant, 4>& around, int level,
+  std::int64_t addFace(const FaceRecord& r, std::array<Occupant, 4>& around, int level,
                        const std::vector<std::int32_t>& corner, const std::array<int, 2>& axes) {
     const int quadrants = 1 << k_;
     const bool unproven = !r.proven || r.roots > 1 || std::abs(r.degree) > 1 || r.degenerate;
@@ -767,7 +864,7 @@ class AdaptiveCrossing {
       if (singular) singular_[around[q].leaf] = 1;
       if (unproven)
         setTrouble(around[q].leaf, r.roots > 0
-                                       ? std::span<const S>(r.root)
+                                       ? faces_.root(r)
                                        : std::span<const S>(faceCentre(level, corner, axes)));
     }
     if (r.degree == 0) {
@@ -800,7 +897,8 @@ class AdaptiveCrossing {
     if (p.size > 1 && p.node[p.size - 1] == p.node[0]) --p.size;
     if (unproven) recordUnproven(around, FaceRef{level, corner, axes});
     p.root = static_cast<std::int32_t>(rootPoints_.size() / n_);
-    rootPoints_.insert(rootPoints_.end(), r.root.begin(), r.root.end());
+    const std::span<const S> root = faces_.root(r);
+    rootPoints_.insert(rootPoints_.end(), root.begin(), root.end());
     for (int copy = 0; copy < std::abs(r.degree); ++copy) polygons_.push_back(p);
     return r.degenerate;
   }
@@ -1911,7 +2009,7 @@ class AdaptiveCrossing {
   std::unordered_map<const std::vector<Bernstein<S>>*, RootForms> rootForms_;
   std::vector<Bernstein<S>> patches_;  ///< the current leaf's patches
   std::vector<S> margins_;
-  std::unordered_map<std::uint64_t, FaceResult<S>> faces_;
+  FaceStore<S> faces_;  ///< every solved face
   std::vector<Polygon> polygons_;
   std::vector<S> rootPoints_;
   // Per leaf: proven empty (-1 unknown), next to an unproven face, next to an undecided face,
@@ -1919,7 +2017,7 @@ class AdaptiveCrossing {
   std::vector<std::int8_t> empty_, bandEmpty_;
   std::vector<std::uint8_t> unproven_, stuck_, singular_;
   std::vector<std::int8_t> graph_, faceGraph_;
-  std::vector<LeafFaces> prefetched_;  ///< prefetchFaces, per leaf, for one crossFaces
+  std::vector<LeafFaces> prefetched_;  ///< prefetchFaces, per leaf of the current window
   CellMap<std::int32_t> touchLeaves_;  ///< the touch leaves of one crossFaces, by base key
   std::int32_t prefetchFrom_ = 0, prefetchEnd_ = 0;  ///< the leaves prefetched_ holds
   /// Leaves per window of prefetchFaces: enough tasks for many threads, a few MB of slots.
