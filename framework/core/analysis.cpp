@@ -17,11 +17,13 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <numeric>
 #include <span>
 #include <unordered_map>
 #include <vector>
 
+#include "framework/core/flat_map.hpp"
 #include "framework/core/parallel.hpp"
 
 namespace ndc {
@@ -105,7 +107,7 @@ void markDuplicates(const std::vector<std::int32_t>& keys, std::size_t width,
     }
     return a < b;
   };
-  std::sort(order.begin(), order.end(), less);
+  parallelSort(order.begin(), order.end(), less);  // ties broken by the record number
   for (std::size_t i = 1; i < order.size(); ++i) {
     if (std::equal(key(order[i]), key(order[i]) + std::ptrdiff_t(width), key(order[i - 1])))
       keep[order[i]] = 0;
@@ -128,7 +130,7 @@ Complex<S> weld(const Complex<S>& complex, double tolerance) {
 
   // Step 1: greedy merge through the hashed bucket grid.
   // bucket hash -> its latest vertex; next[r]: the vertex added to the bucket before r.
-  std::unordered_map<std::uint64_t, std::int32_t> buckets;
+  FlatMap<std::uint64_t, std::int32_t> buckets;
   std::vector<std::int32_t> next;
   buckets.reserve(complex.vertexCount());
   std::vector<std::int32_t> remap(complex.vertexCount());
@@ -160,9 +162,8 @@ Complex<S> weld(const Complex<S>& complex, double tolerance) {
     for (int j = 0; j < n; ++j) offset[j] = reach[j][0];
     while (found < 0) {
       for (int j = 0; j < n; ++j) probe[j] = home[j] + offset[j];
-      auto it = buckets.find(hashOf(probe));
-      if (it != buckets.end()) {
-        for (std::int32_t r = it->second; r >= 0; r = next[r]) {
+      if (const std::int32_t* latest = buckets.find(hashOf(probe))) {
+        for (std::int32_t r = *latest; r >= 0; r = next[r]) {
           const auto y = out.vertex(r);
           S d2 = 0;
           for (int j = 0; j < n; ++j) d2 += (x[j] - y[j]) * (x[j] - y[j]);
@@ -176,9 +177,9 @@ Complex<S> weld(const Complex<S>& complex, double tolerance) {
     }
     if (found < 0) {
       found = out.addVertex(x, complex.vertexCell.empty() ? -1 : complex.vertexCell[v]);
-      const auto [slot, added] = buckets.try_emplace(hashOf(home), found);
-      next.push_back(added ? -1 : slot->second);
-      slot->second = found;
+      const auto [latest, added] = buckets.insert(hashOf(home), found);
+      next.push_back(added ? -1 : *latest);
+      *latest = found;
     }
     remap[v] = found;
   }
@@ -238,7 +239,7 @@ EdgeCounts countEdges(const Complex<S>& welded, MeshStats& stats) {
     }
   }
   // Sorted keys, then runs of equal ones (no hash node per edge).
-  std::sort(keys.begin(), keys.end());
+  parallelSort(keys.begin(), keys.end(), std::less<>());
   EdgeCounts edges;
   for (std::size_t i = 0; i < keys.size(); ++i) {
     if (i == 0 || keys[i] != keys[i - 1])

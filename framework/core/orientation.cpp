@@ -8,6 +8,8 @@
 #include <utility>
 #include <vector>
 
+#include "framework/core/parallel.hpp"
+
 namespace ndc {
 
 namespace {
@@ -63,8 +65,11 @@ bool orientSimplices(int k, std::vector<std::int32_t>& simplices) {
       entries.push_back({key, static_cast<std::uint32_t>(s), i, facets[i].sign});
     }
   }
-  std::sort(entries.begin(), entries.end(), [](const FacetEntry& a, const FacetEntry& b) {
-    return a.key != b.key ? a.key < b.key : a.simplex < b.simplex;
+  // (key, simplex) is unique: a simplex's facets are distinct once degenerate ones are welded
+  // away, and the facet number breaks the tie otherwise; so the order is total.
+  parallelSort(entries.begin(), entries.end(), [](const FacetEntry& a, const FacetEntry& b) {
+    if (a.key != b.key) return a.key < b.key;
+    return a.simplex != b.simplex ? a.simplex < b.simplex : a.facet < b.facet;
   });
   // For each facet i of simplex s: the entry of the other simplex on it when exactly two
   // simplices share it, else -1 (boundary or non-manifold: nothing to agree with).

@@ -10,6 +10,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
 #include <cstddef>
@@ -69,6 +70,14 @@ void parallelFor(std::size_t count, Body&& body, std::size_t grain = 1) {
         for (std::size_t i = begin; i != end; ++i) body(i);
       },
       grain);
+}
+
+/// Sorts [first, last) by `less` on the current task arena. `less` must be a strict total
+/// order on the elements' values (two elements compare equal only when they are equal), so
+/// that the result is the one std::sort gives, whatever the number of threads.
+template <class It, class Less>
+void parallelSort(It first, It last, Less less) {
+  tbb::parallel_sort(first, last, less);
 }
 
 /// Runs `f()` on a task arena of `threads` worker threads (0: every hardware thread), so that

@@ -220,6 +220,10 @@ void parallelTraversal(const B& bounding, const D& subdivision, const Grid& grid
     if (progress && std::this_thread::get_id() == caller)
       progress("subdivision", std::min(1.0, before + double(done) * share));
   });
+  std::size_t total = cells.size();
+  for (const CellList& part : parts) total += part.size();
+  cells.index.reserve(total * std::size_t(grid.n));
+  cells.lookup.reserve(total);  // no rehashing while the parts are appended
   for (const CellList& part : parts) {
     cells.visited += part.visited;
     for (std::size_t c = 0; c < part.size(); ++c)
