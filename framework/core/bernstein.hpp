@@ -75,6 +75,8 @@ class Bernstein {
   /// The same polynomial represented on a sub-box of the domain (by blossoming: two splits
   /// per axis). The sub-box may also extend outside the domain (extrapolation).
   Bernstein restrict(const Box<S>& sub) const;
+  /// restrict into `out`: allocation-free when `out` already has this form's size.
+  void restrictInto(const Box<S>& sub, Bernstein& out) const;
 
   /// Face slice: the polynomial in the n - 1 remaining variables obtained by fixing `axis`
   /// at its lower (`upper == false`) or upper end. Its coefficients are the boundary

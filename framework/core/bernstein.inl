@@ -379,6 +379,13 @@ void Bernstein<S>::halve(int axis, Bernstein& left, Bernstein& right) const {
 
 template <class S>
 Bernstein<S> Bernstein<S>::restrict(const Box<S>& sub) const {
+  Bernstein r;
+  restrictInto(sub, r);
+  return r;
+}
+
+template <class S>
+void Bernstein<S>::restrictInto(const Box<S>& sub, Bernstein& r) const {
   using namespace bernstein_detail;
   using std::abs;
   if (sub.lo.size() != static_cast<std::size_t>(dim()) ||
@@ -388,7 +395,7 @@ Bernstein<S> Bernstein<S>::restrict(const Box<S>& sub) const {
     if (!(sub.lo[a] < sub.hi[a]))
       throw std::invalid_argument("Bernstein::restrict: empty sub-box along axis " +
                                   std::to_string(a));
-  Bernstein r(*this);
+  r = *this;  // vectors assigned in place: no allocation when r has the size already
   S tmp;
   for (int a = 0; a < dim(); ++a) {
     const S &lo = domain_.lo[a], &hi = domain_.hi[a], &sa = sub.lo[a], &sb = sub.hi[a];
@@ -412,7 +419,6 @@ Bernstein<S> Bernstein<S>::restrict(const Box<S>& sub) const {
     }
   }
   r.domain_ = sub;
-  return r;
 }
 
 template <class S>

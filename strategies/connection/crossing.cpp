@@ -443,7 +443,7 @@ class AdaptiveCrossing {
 
   /// The patches of one leaf, restricted on first use, and the graph tests' scratch.
   struct LeafTests {
-    std::vector<Bernstein<S>> patches;
+    std::vector<Bernstein<S>>& patches;  ///< leafScratch's
     std::vector<Interval<S>> jacobian;
     GraphTest<S> test;
     bool ready = false;
@@ -490,7 +490,7 @@ class AdaptiveCrossing {
     bool empty = false;
     band = false;
     for (int i = 0; i < m_; ++i) {
-      patches[i] = (*rf.forms)[i].restrict(box);
+      (*rf.forms)[i].restrictInto(box, patches[i]);
       const S c = level_[i];
       empty = empty || clearsRange(patches[i], c, c, rf.margins[i]);
       band = band ||
@@ -664,6 +664,7 @@ class AdaptiveCrossing {
     };
     std::array<Occupant, 4> around;
     std::vector<OwnedFace> out;
+    out.reserve(fixedAxes_.size() << k_);  // every face kind at most once: one allocation
     for (std::size_t a = 0; a < fixedAxes_.size(); ++a) {
       for (int side = 0; side < (1 << k_); ++side) {
         if (!ownedFace(level, a, side, around, c, region)) continue;
@@ -709,19 +710,24 @@ class AdaptiveCrossing {
     // The regions around the face in cyclic order (k = 2): (-a,-b), (+a,-b), (+a,+b),
     // (-a,+b), relative to the face's lower corner, which is c's corner moved by `side`. A
     // finer region means the face is not minimal: its parts belong to the finer leaves. The
-    // face belongs to the first leaf of its own level.
-    bool minimal = true, owner = true;
+    // face belongs to the first leaf of its own level. The regions next to c across one face
+    // (which `region` has looked up for the other faces already) come first, so that a face
+    // that is not minimal or not c's is rejected before its diagonal region is looked up.
     std::array<int, 2> offset{0, 0};
-    for (int q = 0; q < (1 << k_) && minimal; ++q) {
-      const int bits = k_ == 1 ? q : (q == 0 ? 0 : q == 1 ? 1 : q == 2 ? 3 : 2);
-      for (int t = 0; t < k_; ++t) offset[t] = ((side >> t) & 1) + ((bits >> t) & 1) - 1;
-      around[q] = region(std::span<const int>(axes.data(), k_), std::span<const int>(offset));
-      minimal = around[q].kind != Occ::kFiner;
-      if (around[q].kind == Occ::kLeaf && tree_.level(around[q].leaf) == level &&
-          around[q].leaf < c)
-        owner = false;
+    for (int pass = 0; pass < 2; ++pass) {
+      for (int q = 0; q < (1 << k_); ++q) {
+        const int bits = k_ == 1 ? q : (q == 0 ? 0 : q == 1 ? 1 : q == 2 ? 3 : 2);
+        for (int t = 0; t < k_; ++t) offset[t] = ((side >> t) & 1) + ((bits >> t) & 1) - 1;
+        const bool diagonal = k_ == 2 && offset[0] != 0 && offset[1] != 0;
+        if (diagonal != (pass == 1)) continue;
+        around[q] = region(std::span<const int>(axes.data(), k_), std::span<const int>(offset));
+        if (around[q].kind == Occ::kFiner) return false;
+        if (around[q].kind == Occ::kLeaf && tree_.level(around[q].leaf) == level &&
+            around[q].leaf < c)
+          return false;
+      }
     }
-    return minimal && owner;
+    return true;
   }
 
   /// restrictTo(c), or its answer from prefetchFaces (then patches_ are not c's and `ready`
@@ -804,9 +810,21 @@ class AdaptiveCrossing {
     prefetchFrom_ = prefetchEnd_ = 0;
   }
 
+  /// A task's patches: per thread in double (restrictLeaf then allocates nothing per leaf),
+  /// `own` (the caller's, fresh) in MPFR, whose numbers carry a precision.
+  static std::vector<Bernstein<S>>& leafScratch(std::vector<Bernstein<S>>& own) {
+    if constexpr (std::is_same_v<S, double>) {
+      thread_local std::vector<Bernstein<S>> scratch;
+      return scratch;
+    } else {
+      return own;
+    }
+  }
+
   /// One task of prefetchFaces.
   void prefetchLeaf(std::int32_t c, const RootForms& rf, LeafFaces& out) const {
-    std::vector<Bernstein<S>> patches;
+    std::vector<Bernstein<S>> own;
+    std::vector<Bernstein<S>>& patches = leafScratch(own);
     const auto prepare = [&] {
       if (out.empty >= 0) return;
       bool band = false;
@@ -1217,7 +1235,8 @@ class AdaptiveCrossing {
   /// failure, its cached graph tests and its trouble point), so certify runs the leaves in
   /// parallel and the result does not depend on their order.
   void certifyLeaf(std::int32_t c, const RootForms& rf, const std::vector<std::int32_t>& ps) {
-    LeafTests t{{}, {}, graphTest_};
+    std::vector<Bernstein<S>> own;
+    LeafTests t{leafScratch(own), {}, graphTest_};
     if (empty_[c] == 1) {
       // M_c misses the leaf; M may not (it lies 1e-8 h away): where it meets the leaf, the
       // isotopy from M to M_c needs the Jacobian's rank there.
