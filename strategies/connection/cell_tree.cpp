@@ -18,6 +18,14 @@ CellTree::CellTree(const Grid& base, int maxLevel)
   internal_.resize(grids_.size());
 }
 
+void CellTree::reserve(int level, std::size_t count) {
+  leaves_[level - base_].reserve(leaves_[level - base_].size() + count);
+  level_.reserve(level_.size() + count);
+  index_.reserve(index_.size() + count * std::size_t(n_));
+  active_.reserve(active_.size() + count);
+  solution_.reserve(solution_.size() + count);
+}
+
 std::int32_t CellTree::addLeaf(int level, std::span<const std::int32_t> index, bool solution) {
   const auto leaf = static_cast<std::int32_t>(level_.size());
   leaves_[level - base_].insert(grid(level).pack(index), leaf);

@@ -37,6 +37,8 @@ class CellTree {
   /// The grid of level `level` (same domain, 2^level cells per axis).
   const Grid& grid(int level) const { return grids_[level - base_]; }
 
+  /// Room for `count` more leaves of `level` without growing (before adding the base cells).
+  void reserve(int level, std::size_t count);
   /// Adds a leaf (its key must be new at its level); returns its number.
   std::int32_t addLeaf(int level, std::span<const std::int32_t> index, bool solution);
   /// Refines an active leaf: it becomes internal; `solution[c]` says whether child c (bit j:

@@ -190,6 +190,41 @@ struct Polygon {
   bool outside = false;    ///< a node lies beyond the domain: not a cell of the mesh
 };
 
+/// The polygons at each node (leaf) of a polygon list, in polygon order, as one array: the
+/// polygons of leaf c are polygons_[first_[c], first_[c + 1]). Built by counting, so it costs
+/// two passes and no vector per leaf.
+class Incidence {
+ public:
+  /// Over `leaves` leaves; `mesh`: only the polygons that are cells of the mesh (not outside).
+  Incidence(const std::vector<Polygon>& polygons, std::size_t leaves, bool mesh) {
+    const auto counted = [&](const Polygon& poly, int i) {
+      return poly.node[i] >= 0 && !(mesh && poly.outside);
+    };
+    first_.assign(leaves + 1, 0);
+    for (const Polygon& poly : polygons) {
+      for (int i = 0; i < poly.size; ++i)
+        if (counted(poly, i)) ++first_[std::size_t(poly.node[i]) + 1];
+    }
+    for (std::size_t c = 0; c < leaves; ++c) first_[c + 1] += first_[c];
+    polygons_.resize(first_.back());
+    std::vector<std::size_t> at(first_.begin(), first_.end() - 1);
+    for (std::size_t p = 0; p < polygons.size(); ++p) {
+      for (int i = 0; i < polygons[p].size; ++i)
+        if (counted(polygons[p], i))
+          polygons_[at[std::size_t(polygons[p].node[i])]++] = static_cast<std::int32_t>(p);
+    }
+  }
+
+  /// The polygons at leaf c.
+  std::span<const std::int32_t> operator[](std::size_t c) const {
+    return std::span<const std::int32_t>(polygons_).subspan(first_[c], first_[c + 1] - first_[c]);
+  }
+
+ private:
+  std::vector<std::size_t> first_;
+  std::vector<std::int32_t> polygons_;
+};
+
 /// Where a minimal m-face lies: its level, the index of its lower corner there and its k fixed
 /// axes.
 struct FaceRef {
@@ -1212,13 +1247,7 @@ class AdaptiveCrossing {
 
   /// The certificate of every active leaf (docs/certificate.md) into failure_.
   void certify() {
-    std::vector<std::vector<std::int32_t>> incident(tree_.size());
-    for (std::size_t p = 0; p < polygons_.size(); ++p) {
-      for (int i = 0; i < polygons_[p].size; ++i) {
-        if (polygons_[p].node[i] >= 0)
-          incident[polygons_[p].node[i]].push_back(static_cast<std::int32_t>(p));
-      }
-    }
+    const Incidence incident(polygons_, tree_.size(), false);
     std::fill(failure_.begin(), failure_.end(), Failure::kNone);
     std::vector<std::int32_t> leaves;
     for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
@@ -1234,7 +1263,7 @@ class AdaptiveCrossing {
   /// The certificate of active leaf c into failure_[c]. It writes only what belongs to c (its
   /// failure, its cached graph tests and its trouble point), so certify runs the leaves in
   /// parallel and the result does not depend on their order.
-  void certifyLeaf(std::int32_t c, const RootForms& rf, const std::vector<std::int32_t>& ps) {
+  void certifyLeaf(std::int32_t c, const RootForms& rf, std::span<const std::int32_t> ps) {
     std::vector<Bernstein<S>> own;
     LeafTests t{leafScratch(own), {}, graphTest_};
     if (empty_[c] == 1) {
@@ -1276,7 +1305,7 @@ class AdaptiveCrossing {
   /// and the polygons around the unproven face join two block nodes only, which the mesh
   /// drops) and its link, with every block one node, is one cycle. verifyBlocks dissolves the
   /// blocks that do not stand until the rest do.
-  void mergeBlocks(const std::vector<std::vector<std::int32_t>>& incident) {
+  void mergeBlocks(const Incidence& incident) {
     blocks_.clear(), blockLo_.clear(), blockLevel_.clear(), blockSaved_.clear();
     blockEmpties_.clear();
     block_.assign(tree_.size(), -1);
@@ -1340,7 +1369,7 @@ class AdaptiveCrossing {
   }
 
   /// Dissolves the blocks that do not stand (mergeBlocks) until every remaining one does.
-  void verifyBlocks(const std::vector<std::vector<std::int32_t>>& incident) {
+  void verifyBlocks(const Incidence& incident) {
     for (bool changed = true; changed;) {
       changed = false;
       for (std::size_t b = 0; b < blocks_.size(); ++b) {
@@ -1358,7 +1387,7 @@ class AdaptiveCrossing {
   /// Whether block b stands among the others: every unproven face next to it inside it, or
   /// inside one face of its box with block leaves across, and its link (every block one node)
   /// one cycle.
-  bool blockStands(std::size_t b, const std::vector<std::vector<std::int32_t>>& incident) const {
+  bool blockStands(std::size_t b, const Incidence& incident) const {
     const int level = blockLevel_[b];
     const std::vector<std::int32_t>& lo = blockLo_[b];
     const auto stands = [&](const std::vector<std::int32_t>& faces) {
@@ -1388,9 +1417,8 @@ class AdaptiveCrossing {
   }
 
   /// The polygons incident to any of the leaves, once each.
-  static std::vector<std::int32_t> blockPolygons(
-      const std::vector<std::int32_t>& members,
-      const std::vector<std::vector<std::int32_t>>& incident) {
+  static std::vector<std::int32_t> blockPolygons(const std::vector<std::int32_t>& members,
+                                                 const Incidence& incident) {
     std::vector<std::int32_t> around;
     for (std::int32_t c : members)
       around.insert(around.end(), incident[c].begin(), incident[c].end());
@@ -1458,8 +1486,8 @@ class AdaptiveCrossing {
   /// The certificate of the block of 2^n leaves of `level` with lower corner `lo`: its leaves
   /// free, one polynomial piece, every unproven face inside it, the crossings on its boundary
   /// one simple piece, and the graph and face graph tests on its box.
-  bool tryBlock(int level, const std::vector<std::int32_t>& lo,
-                const std::vector<std::vector<std::int32_t>>& incident, bool tentative) {
+  bool tryBlock(int level, const std::vector<std::int32_t>& lo, const Incidence& incident,
+                bool tentative) {
     std::vector<std::int32_t> members;
     std::vector<CellKey> empties;
     if (!blockMembers(level, lo, members, empties)) return false;
@@ -1546,9 +1574,8 @@ class AdaptiveCrossing {
 
   /// The polygons of the block's boundary with its leaves as one node (members.front());
   /// those inside it drop out. False when a polygon meets the block twice (not a box).
-  bool blockLink(const std::vector<std::int32_t>& members,
-                 const std::vector<std::vector<std::int32_t>>& incident, std::vector<Polygon>& link,
-                 std::vector<std::int32_t>& ps) const {
+  bool blockLink(const std::vector<std::int32_t>& members, const Incidence& incident,
+                 std::vector<Polygon>& link, std::vector<std::int32_t>& ps) const {
     for (std::int32_t p : blockPolygons(members, incident)) {
       const Polygon q = collapsed(polygons_[p], [&](std::int64_t node) {
         return std::find(members.begin(), members.end(), node) != members.end() ? members.front()
@@ -1600,7 +1627,7 @@ class AdaptiveCrossing {
   /// c; `nodes` receives the distinct neighbour nodes the edges number.
   static std::vector<std::array<int, 2>> linkEdges(std::int64_t c,
                                                    const std::vector<Polygon>& polygons,
-                                                   const std::vector<std::int32_t>& ps,
+                                                   std::span<const std::int32_t> ps,
                                                    std::vector<std::int64_t>& nodes) {
     std::vector<std::array<int, 2>> edges;
     for (std::int32_t p : ps) {
@@ -1623,7 +1650,7 @@ class AdaptiveCrossing {
   /// (k = 1), or one cycle through every neighbour region exactly twice (k = 2; the regions
   /// beyond the domain are nodes too, so a surface with boundary closes its loop there).
   bool simpleLink(std::int64_t c, const std::vector<Polygon>& polygons,
-                  const std::vector<std::int32_t>& ps) const {
+                  std::span<const std::int32_t> ps) const {
     if (ps.empty()) return true;
     if (k_ == 1) return ps.size() == 2;
     std::vector<std::int64_t> nodes;
@@ -1646,6 +1673,7 @@ class AdaptiveCrossing {
   /// level (or the leaf budget is spent). Returns the degenerate crossings of the last pass.
   std::int64_t refineAndCertify() {
     tree_ = CellTree(grid_, tree_.maxLevel());
+    tree_.reserve(grid_.depth, in_.cells.size());
     for (std::size_t c = 0; c < in_.cells.size(); ++c)
       tree_.addLeaf(grid_.depth, in_.cells.cell(c), true);
     tree_.setBaseCells(static_cast<std::int32_t>(in_.cells.size()));
@@ -1844,10 +1872,7 @@ class AdaptiveCrossing {
     for (std::size_t p = 0; p < polygons_.size(); ++p) {
       if (!polygons_[p].outside) mesh.push_back(static_cast<std::int32_t>(p));
     }
-    std::vector<std::vector<std::int32_t>> incident(count);
-    for (std::int32_t p : mesh) {
-      for (int i = 0; i < polygons_[p].size; ++i) incident[polygons_[p].node[i]].push_back(p);
-    }
+    const Incidence incident(polygons_, count, true);
     const auto slotOf = [&](std::int32_t p, std::size_t c) {
       int at = 0;
       while (polygons_[p].node[at] != static_cast<std::int64_t>(c)) ++at;
@@ -1882,20 +1907,22 @@ class AdaptiveCrossing {
     bool singular = false;   ///< the Jacobian at x is (nearly) rank-deficient
   };
 
-  /// The dual vertices in leaf and piece order: the means of the pieces' crossings in order,
-  /// then their projections onto M in parallel (each into its own slot).
+  /// The dual vertices in leaf and piece order: the mean of each piece's crossings (summed in
+  /// the order of the leaf's polygons) projected onto M, each leaf's in parallel into its own
+  /// slots.
   template <class SlotOf>
-  std::vector<DualVertex> dualVertices(const std::vector<std::vector<std::int32_t>>& incident,
+  std::vector<DualVertex> dualVertices(const Incidence& incident,
                                        const std::vector<std::int32_t>& piece,
                                        const std::vector<std::int32_t>& pieceCount,
                                        const SlotOf& slotOf) const {
-    std::vector<DualVertex> out;
-    std::vector<S> sums;
-    std::vector<std::int32_t> counts;
-    for (std::size_t c = 0; c < pieceCount.size(); ++c) {
-      if (pieceCount[c] == 0) continue;
-      sums.assign(std::size_t(pieceCount[c]) * n_, S(0));
-      counts.assign(pieceCount[c], 0);
+    std::vector<std::size_t> first(pieceCount.size() + 1, 0);
+    for (std::size_t c = 0; c < pieceCount.size(); ++c)
+      first[c + 1] = first[c] + std::size_t(pieceCount[c]);
+    std::vector<DualVertex> out(first.back());
+    parallelFor(pieceCount.size(), [&](std::size_t c) {
+      if (pieceCount[c] == 0) return;
+      std::vector<S> sums(std::size_t(pieceCount[c]) * n_, S(0));
+      std::vector<std::int32_t> counts(pieceCount[c], 0);
       for (std::int32_t p : incident[c]) {
         const std::int32_t q = piece[p * 4 + slotOf(p, c)];
         for (int j = 0; j < n_; ++j)
@@ -1903,12 +1930,14 @@ class AdaptiveCrossing {
         ++counts[q];
       }
       for (int q = 0; q < pieceCount[c]; ++q) {
-        DualVertex d{static_cast<std::int32_t>(c), q, std::vector<S>(n_)};
+        DualVertex& d = out[first[c] + std::size_t(q)];
+        d.leaf = static_cast<std::int32_t>(c);
+        d.piece = q;
+        d.x.resize(n_);
         for (int j = 0; j < n_; ++j) d.x[j] = sums[std::size_t(q) * n_ + j] / counts[q];
-        out.push_back(std::move(d));
+        projectVertex(d);
       }
-    }
-    parallelFor(out.size(), [&](std::size_t i) { projectVertex(out[i]); });
+    });
     return out;
   }
 
@@ -1929,7 +1958,7 @@ class AdaptiveCrossing {
   /// per incident polygon, between the polygon's two nodes next to c), one per sheet of M in
   /// the leaf; for k = 1 one. `ambiguous`: set when the piece is not simple.
   template <class SlotOf>
-  std::int32_t pieces(std::size_t c, const std::vector<std::int32_t>& ps,
+  std::int32_t pieces(std::size_t c, std::span<const std::int32_t> ps,
                       std::vector<std::int32_t>& piece, const SlotOf& slotOf,
                       std::uint8_t& ambiguous) const {
     if (ps.empty()) return 0;
