@@ -2,6 +2,9 @@
 // line on standard error: status 2 for bad input or usage, 1 for an internal error; `solve
 // --check` exits 3 when the mesh differs from the problem's [expect] (solve_options.hpp).
 #include <CLI/CLI.hpp>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include <iostream>
 #include <string>
@@ -98,9 +101,22 @@ int run(int argc, char** argv) {
   return ndc::cli::runSolve(solveOptions, problem);
 }
 
+/// glibc's allocator for a run that allocates and frees much (docs/performance.md,
+/// "Allocator"): keep freed memory for reuse instead of returning it to the system and
+/// faulting it in again (trim threshold and top pad), and serve blocks up to 32 MB from the
+/// heap. Only the tool does this: the library leaves a host process's allocator alone.
+void tuneAllocator() {
+#if defined(__GLIBC__)
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 1 << 30);
+  mallopt(M_TOP_PAD, 64 << 20);
+#endif
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  tuneAllocator();
   try {
     return run(argc, argv);
   } catch (const ndc::UsageError& e) {
