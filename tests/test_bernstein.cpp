@@ -297,6 +297,44 @@ TEMPLATE_TEST_CASE("restrict to sub-boxes inside and partly outside", "[bernstei
   }
 }
 
+TEMPLATE_TEST_CASE("restrictInto gives restrict's form and reuses the output storage",
+                   "[bernstein]", NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(160);
+  using S = TestType;
+  std::mt19937 rng(15);
+  // One output for forms of every dimension and degree in turn: whatever it held before, it
+  // must come out as restrict's form, coefficient for coefficient.
+  Bernstein<S> out;
+  for (int trial = 0; trial < trials<S>(); ++trial) {
+    const Box<S> box = randomBox<S>(rng, randomDim<S>(rng));
+    const Bernstein<S> p = randomPoly(rng, box);
+    Box<S> sub;
+    for (int j = 0; j < box.dim(); ++j) {
+      double u1 = std::uniform_real_distribution<double>(-0.25, 1.25)(rng);
+      double u2 = std::uniform_real_distribution<double>(-0.25, 1.25)(rng);
+      if (u1 > u2) std::swap(u1, u2);
+      if (u2 - u1 < 0.01) u2 = u1 + 0.01;
+      sub.lo.push_back(box.lo[j] + S(u1) * box.width(j));
+      sub.hi.push_back(box.lo[j] + S(u2) * box.width(j));
+    }
+    const Bernstein<S> expected = p.restrict(sub);
+    p.restrictInto(sub, out);
+    CHECK(out.degrees() == expected.degrees());
+    CHECK(out.domain().lo == expected.domain().lo);
+    CHECK(out.domain().hi == expected.domain().hi);
+    const auto same = [&] {
+      return std::equal(out.coefficients().begin(), out.coefficients().end(),
+                        expected.coefficients().begin(), expected.coefficients().end());
+    };
+    CHECK(same());
+    // The same shape again: no new coefficient storage.
+    const S* data = out.coefficients().data();
+    p.restrictInto(sub, out);
+    CHECK(out.coefficients().data() == data);
+    CHECK(same());
+  }
+}
+
 TEMPLATE_TEST_CASE("derivative: finite differences, product rule, variables", "[bernstein]",
                    NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(160);

@@ -6,12 +6,15 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cstdint>
 #include <filesystem>
+#include <random>
 #include <regex>
 #include <string>
 #include <vector>
 
 #include "framework/applications/load.hpp"
+#include "framework/core/parallel.hpp"
 #include "framework/pipeline/pipeline.hpp"
 #include "tests/test_process.hpp"
 
@@ -128,6 +131,33 @@ TEST_CASE("threads: runPipeline gives the same result with 1 and 2 threads", "[t
   CHECK(two.summary.visited == one.summary.visited);
   CHECK(two.summary.topology.certified == one.summary.topology.certified);
   CHECK(two.summary.mesh.maxChordError == one.summary.mesh.maxChordError);
+}
+
+TEST_CASE("threads: parallelSort gives std::sort's order on 1, 2 and 3 threads", "[threads]") {
+  // Records with many equal keys and a unique tie-break (as the facet, edge and duplicate
+  // sorts of the analysis have): the order is total, so every sort must give the same one.
+  struct Record {
+    std::uint64_t key;
+    std::uint32_t index;
+    bool operator==(const Record&) const = default;
+  };
+  const auto less = [](const Record& a, const Record& b) {
+    return a.key != b.key ? a.key < b.key : a.index < b.index;
+  };
+  std::mt19937_64 rng(7);
+  for (const std::size_t count :
+       {std::size_t{0}, std::size_t{1}, std::size_t{1000}, std::size_t{300000}}) {
+    std::vector<Record> records(count);
+    for (std::size_t i = 0; i < count; ++i)
+      records[i] = {rng() % (count / 8 + 1), static_cast<std::uint32_t>(i)};
+    std::vector<Record> expected = records;
+    std::sort(expected.begin(), expected.end(), less);
+    for (const int threads : {1, 2, 3}) {
+      std::vector<Record> sorted = records;
+      ndc::withThreads(threads, [&] { ndc::parallelSort(sorted.begin(), sorted.end(), less); });
+      CHECK(sorted == expected);
+    }
+  }
 }
 
 TEST_CASE("threads: --threads takes an integer from 1 to 4096, else exit 2 with one line",
