@@ -286,9 +286,11 @@ class FaceStore {
     const auto end = static_cast<std::int64_t>(records_.size());
     if (b.count > 0 && b.first + b.count != end) {
       // The leaf's block is not the last one (a face of an earlier round's leaf that it did
-      // not own then): move the block to the end, where it can grow.
-      records_.insert(records_.end(), records_.begin() + b.first,
-                      records_.begin() + b.first + b.count);
+      // not own then): move the block to the end, where it can grow (through a copy: a
+      // vector may not insert a range of itself).
+      const std::vector<FaceRecord> block(records_.begin() + b.first,
+                                          records_.begin() + b.first + b.count);
+      records_.insert(records_.end(), block.begin(), block.end());
       b.first = end;
     } else if (b.count == 0) {
       b.first = end;
