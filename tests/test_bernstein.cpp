@@ -538,6 +538,41 @@ TEMPLATE_TEST_CASE("faceSlice fixes an axis at its lower or upper end", "[bernst
   }
 }
 
+TEMPLATE_TEST_CASE("faceSliceInto slices into an output of any earlier shape and reuses it",
+                   "[bernstein]", NDC_SCALARS) {
+  ndc::test::PrecisionScope<TestType> scope(160);
+  using S = TestType;
+  std::mt19937 rng(16);
+  // One output for slices of every dimension and degree in turn: whatever it held before, it
+  // must come out as the face's form (checked against p evaluated on the face).
+  Bernstein<S> out;
+  for (int trial = 0; trial < trials<S>() / 2; ++trial) {
+    const int n = randomDim<S>(rng);
+    const Box<S> box = randomBox<S>(rng, n);
+    const Bernstein<S> p = randomPoly(rng, box);
+    const int axis = std::uniform_int_distribution<int>(0, n - 1)(rng);
+    const bool upper = rng() % 2 == 1;
+    p.faceSliceInto(axis, upper, out);
+    std::vector<int> degrees = p.degrees();
+    degrees.erase(degrees.begin() + axis);
+    CHECK(out.degrees() == degrees);
+    for (int k = 0; k < 4; ++k) {
+      const std::vector<S> x = randomPoint(rng, box);
+      std::vector<S> y = x, xf = x;
+      y.erase(y.begin() + axis);
+      xf[axis] = upper ? box.hi[axis] : box.lo[axis];
+      CHECK(close(out.evaluate(y), directEvaluate(p, xf), maxAbs(p), 4));
+    }
+    // The same slice again: no new coefficient storage, the same coefficients.
+    const std::vector<S> first(out.coefficients().begin(), out.coefficients().end());
+    const S* data = out.coefficients().data();
+    p.faceSliceInto(axis, upper, out);
+    CHECK(out.coefficients().data() == data);
+    CHECK(std::equal(first.begin(), first.end(), out.coefficients().begin(),
+                     out.coefficients().end()));
+  }
+}
+
 TEMPLATE_TEST_CASE("misuse throws std::invalid_argument", "[bernstein]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(160);
   using S = TestType;
@@ -562,6 +597,8 @@ TEMPLATE_TEST_CASE("misuse throws std::invalid_argument", "[bernstein]", NDC_SCA
   CHECK_THROWS_AS(p.restrict(box3), std::invalid_argument);
   CHECK_THROWS_AS(p.restrict(Box<S>{box.hi, box.lo}), std::invalid_argument);
   CHECK_THROWS_AS(p.faceSlice(2, true), std::invalid_argument);
+  Bernstein<S> self = p;
+  CHECK_THROWS_AS(self.faceSliceInto(0, true, self), std::invalid_argument);
   CHECK_THROWS_AS(p.elevate(std::vector<int>{1, 3}), std::invalid_argument);
   CHECK_THROWS_AS(p.elevate(std::vector<int>{2}), std::invalid_argument);
   CHECK_THROWS_AS(p.embed(box3, std::vector<int>{0, 0}), std::invalid_argument);

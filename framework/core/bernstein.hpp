@@ -82,6 +82,9 @@ class Bernstein {
   /// at its lower (`upper == false`) or upper end. Its coefficients are the boundary
   /// coefficients of this one.
   Bernstein faceSlice(int axis, bool upper) const;
+  /// faceSlice into `out` (not `*this`): allocation-free when `out` already has the slice's
+  /// size.
+  void faceSliceInto(int axis, bool upper, Bernstein& out) const;
 
   /// Degree elevation to `degrees` (each at least the current degree).
   Bernstein elevate(std::span<const int> degrees) const;

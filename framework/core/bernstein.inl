@@ -423,27 +423,35 @@ void Bernstein<S>::restrictInto(const Box<S>& sub, Bernstein& r) const {
 
 template <class S>
 Bernstein<S> Bernstein<S>::faceSlice(int axis, bool upper) const {
+  Bernstein r;
+  faceSliceInto(axis, upper, r);
+  return r;
+}
+
+template <class S>
+void Bernstein<S>::faceSliceInto(int axis, bool upper, Bernstein& r) const {
   using namespace bernstein_detail;
   if (axis < 0 || axis >= dim())
     throw std::invalid_argument("Bernstein::faceSlice: bad axis " + std::to_string(axis));
-  Bernstein r;
-  r.domain_ = domain_;
-  r.domain_.lo.erase(r.domain_.lo.begin() + axis);
-  r.domain_.hi.erase(r.domain_.hi.begin() + axis);
-  r.degrees_ = degrees_;
-  r.degrees_.erase(r.degrees_.begin() + axis);
+  if (&r == this) throw std::invalid_argument("Bernstein::faceSliceInto: output is the input");
+  // Every vector assigned in place: no allocation when r has the slice's sizes already.
+  const auto dropAxis = [axis](const auto& from, auto& to) {
+    to.assign(from.begin(), from.begin() + axis);
+    to.insert(to.end(), from.begin() + axis + 1, from.end());
+  };
+  dropAxis(domain_.lo, r.domain_.lo);
+  dropAxis(domain_.hi, r.domain_.hi);
+  dropAxis(degrees_, r.degrees_);
   // The boundary slab i_axis = 0 or d is the coefficient tensor of the face.
   const Slabs sl = slabsOf(degrees_, size(), axis);
   const std::size_t k = upper ? static_cast<std::size_t>(sl.d) : 0;
-  r.coefficients_.clear();
-  r.coefficients_.reserve(sl.outer * sl.st);
+  r.coefficients_.resize(sl.outer * sl.st);
   for (std::size_t o = 0; o < sl.outer; ++o) {
     const auto first =
         coefficients_.begin() + static_cast<std::ptrdiff_t>(o * sl.block() + k * sl.st);
-    r.coefficients_.insert(r.coefficients_.end(), first,
-                           first + static_cast<std::ptrdiff_t>(sl.st));
+    std::copy(first, first + static_cast<std::ptrdiff_t>(sl.st),
+              r.coefficients_.begin() + static_cast<std::ptrdiff_t>(o * sl.st));
   }
-  return r;
 }
 
 template <class S>

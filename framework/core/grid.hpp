@@ -60,11 +60,12 @@ struct Grid {
   double cellWidth(int axis) const;
 };
 
-/// The closed box of the cell with multi-index `index` in scalar S, on `domain` (the grid's
-/// domain in S): `lo_j + (hi_j - lo_j) i_j / 2^L`.
+/// cellBox into `box`, whose vectors keep their storage (no allocation once sized).
 template <class S>
-Box<S> cellBox(const Grid& grid, const Box<S>& domain, std::span<const std::int32_t> index) {
-  Box<S> box{std::vector<S>(grid.n), std::vector<S>(grid.n)};
+void cellBoxInto(const Grid& grid, const Box<S>& domain, std::span<const std::int32_t> index,
+                 Box<S>& box) {
+  box.lo.resize(grid.n);
+  box.hi.resize(grid.n);
   const S cells = S(static_cast<double>(grid.cellsPerAxis()));
   for (int j = 0; j < grid.n; ++j) {
     const S w = (domain.hi[j] - domain.lo[j]) / cells;
@@ -74,6 +75,14 @@ Box<S> cellBox(const Grid& grid, const Box<S>& domain, std::span<const std::int3
                     ? domain.hi[j]
                     : domain.lo[j] + w * S(static_cast<double>(index[j] + 1));
   }
+}
+
+/// The closed box of the cell with multi-index `index` in scalar S, on `domain` (the grid's
+/// domain in S): `lo_j + (hi_j - lo_j) i_j / 2^L`.
+template <class S>
+Box<S> cellBox(const Grid& grid, const Box<S>& domain, std::span<const std::int32_t> index) {
+  Box<S> box;
+  cellBoxInto(grid, domain, index, box);
   return box;
 }
 

@@ -14,6 +14,7 @@
 #include <tbb/task_arena.h>
 
 #include <cstddef>
+#include <type_traits>
 #include <utility>
 
 #include "framework/core/scalar.hpp"
@@ -78,6 +79,22 @@ void parallelFor(std::size_t count, Body&& body, std::size_t grain = 1) {
 template <class It, class Less>
 void parallelSort(It first, It last, Less less) {
   tbb::parallel_sort(first, last, less);
+}
+
+/// The calling thread's working storage of type T for user `Tag`, kept across calls so that its
+/// vectors keep their capacity: a hot loop allocates nothing once warm. Two users that may be
+/// active at once on one thread need different tags; a user must not run a parallel loop while
+/// it holds its storage (the thread could start another task with the same user meanwhile).
+/// In MPFR, whose numbers keep the precision they were made with, it returns `fresh` (the
+/// caller's new object) instead.
+template <class S, class Tag, class T>
+T& threadScratch(T& fresh) {
+  if constexpr (std::is_same_v<S, double>) {
+    thread_local T scratch;
+    return scratch;
+  } else {
+    return fresh;
+  }
 }
 
 /// Runs `f()` on a task arena of `threads` worker threads (0: every hardware thread), so that

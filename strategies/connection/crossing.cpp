@@ -550,62 +550,82 @@ class AdaptiveCrossing {
   /// (FaceSolver::solveByEvaluation); only a face that decides nothing so is solved on the
   /// Bernstein slices of the leaf's patches, which `patches()` returns (restrictLeaf, on first
   /// use) with the margins `margins`.
+  /// solveFace's working storage, per thread (threadScratch): a face solved allocates only
+  /// for the roots it finds.
+  struct FaceWork {
+    FaceSolver<S> solver;
+    std::vector<Bernstein<S>> face, cut;  ///< the face slices, and the first cut when k = 2
+    FaceEnds ends;
+    std::vector<int> freeAxes;
+    std::vector<S> point;
+    Box<S> box, faceBox;
+    std::vector<std::vector<S>> roots;
+  };
+
   template <class Patches>
   FaceResult<S> solveFace(std::int32_t leaf, const std::array<int, 2>& axes, int side,
                           Patches&& patches, std::span<const S> margins,
                           const LeafModel<S>* model = nullptr,
                           const FacePreconditioner<S>* pre = nullptr) const {
-    const Box<S> box = leafBox(leaf);
+    FaceWork fresh;
+    FaceWork& w = threadScratch<S, FaceWork>(fresh);
+    cellBoxInto(tree_.grid(tree_.level(leaf)), domain_, tree_.index(leaf), w.box);
+    const Box<S>& box = w.box;
     const auto ci = tree_.index(leaf);
     const std::int64_t top = tree_.grid(tree_.level(leaf)).cellsPerAxis();
-    FaceEnds ends;
-    std::vector<int> freeAxes;
-    std::vector<S> point(box.lo);
-    Box<S> faceBox;
+    w.ends.lower.clear(), w.ends.upper.clear();
+    w.freeAxes.clear();
+    w.faceBox.lo.clear(), w.faceBox.hi.clear();
+    w.point.assign(box.lo.begin(), box.lo.end());
     for (int j = 0; j < n_; ++j) {
       if (j == axes[0] || j == axes[1]) continue;
-      freeAxes.push_back(j);
-      faceBox.lo.push_back(box.lo[j]);
-      faceBox.hi.push_back(box.hi[j]);
-      ends.lower.push_back(ci[j] == 0);
-      ends.upper.push_back(ci[j] + 1 == top);
+      w.freeAxes.push_back(j);
+      w.faceBox.lo.push_back(box.lo[j]);
+      w.faceBox.hi.push_back(box.hi[j]);
+      w.ends.lower.push_back(ci[j] == 0);
+      w.ends.upper.push_back(ci[j] + 1 == top);
     }
     for (int t = 0; t < k_; ++t) {
       const bool upper = (side >> t) & 1;
-      point[axes[t]] = upper ? box.hi[axes[t]] : box.lo[axes[t]];
+      w.point[axes[t]] = upper ? box.hi[axes[t]] : box.lo[axes[t]];
     }
-    std::vector<std::vector<S>> roots;
+    w.roots.clear();
     FaceResult<S> r;
     // The leaf's affine model first: it excludes most faces without an evaluation on them.
     const std::span<const int> fixed(axes.data(), static_cast<std::size_t>(k_));
     if (model && (faceExcluded(*model, box, fixed, side) ||
                   (pre && faceKrawczykExcludes(*model, *pre, box, fixed, side)))) {
-      return faceOutcome(std::move(r), roots, box, freeAxes, ends);
+      return faceOutcome(std::move(r), w.roots, box, w.freeAxes, w.ends);
     }
-    FaceSolver<S> solver(in_.system, maxFaceDepth_, level_, position_.slack);
+    FaceSolver<S>& solver = w.solver;
+    solver.reset(in_.system, maxFaceDepth_, std::span<const S>(level_), position_.slack);
     if (m_ > 1 && byEvaluation_ &&
-        solver.solveByEvaluation(point, freeAxes, faceBox, ends, roots)) {
+        solver.solveByEvaluation(w.point, w.freeAxes, w.faceBox, w.ends, w.roots)) {
       r.certain = r.proven = true;
     } else {
-      roots.clear();
-      std::vector<Bernstein<S>> face = faceSlices(patches(), axes, side);
-      r.certain = solver.solve(point, freeAxes, face, ends, roots, margins);
+      w.roots.clear();
+      faceSlices(patches(), axes, side, w.face, w.cut);
+      r.certain = solver.solve(w.point, w.freeAxes, w.face, w.ends, w.roots, margins);
       r.proven = solver.proven();
       r.withinRounding = solver.withinRounding();
     }
-    return faceOutcome(std::move(r), roots, box, freeAxes, ends);
+    return faceOutcome(std::move(r), w.roots, box, w.freeAxes, w.ends);
   }
 
-  /// The face slices (axes, side) of a leaf's patches.
-  std::vector<Bernstein<S>> faceSlices(const std::vector<Bernstein<S>>& patches,
-                                       const std::array<int, 2>& axes, int side) const {
-    // Slice the highest fixed axis first so the lower axis numbers stay valid.
-    std::vector<Bernstein<S>> face(m_);
+  /// The face slices (axes, side) of a leaf's patches into `face` (`cut`: scratch).
+  void faceSlices(const std::vector<Bernstein<S>>& patches, const std::array<int, 2>& axes,
+                  int side, std::vector<Bernstein<S>>& face, std::vector<Bernstein<S>>& cut) const {
+    face.resize(m_);
+    cut.resize(m_);
     for (int i = 0; i < m_; ++i) {
-      face[i] = patches[i];
-      for (int t = k_ - 1; t >= 0; --t) face[i] = face[i].faceSlice(axes[t], (side >> t) & 1);
+      if (k_ == 1) {
+        patches[i].faceSliceInto(axes[0], side & 1, face[i]);
+        continue;
+      }
+      // Slice the higher fixed axis first so that the lower axis number stays valid.
+      patches[i].faceSliceInto(axes[1], (side >> 1) & 1, cut[i]);
+      cut[i].faceSliceInto(axes[0], side & 1, face[i]);
     }
-    return face;
   }
 
   /// The rest of solveFace: the roots' degree and degeneracy.
@@ -647,8 +667,8 @@ class AdaptiveCrossing {
       // A copy: touch leaves added below may move the tree's index storage.
       ci.assign(tree_.index(c).begin(), tree_.index(c).end());
       const LeafFaces* known = prefetchedOf(c);
-      const std::vector<OwnedFace> all = known ? std::vector<OwnedFace>() : ownedFaces(c);
-      for (const OwnedFace& f : known ? known->owned : all) {
+      if (!known) ownedFaces(c, owned_);
+      for (const OwnedFace& f : known ? known->owned : owned_) {
         faceAround(ci, f, corner, around);
         const std::uint32_t kind = faceKind(f.a, f.side);
         const FaceRecord* r = faces_.find(c, kind);
@@ -667,11 +687,11 @@ class AdaptiveCrossing {
     std::array<Occupant, 4> around;  ///< as found when the list was made
   };
 
-  /// The faces leaf c owns, in the order crossFaces walks them. Touch leaves, which crossFaces
-  /// adds at excluded base cells, change neither which faces are minimal (a base-level leaf
-  /// where there was none is never finer) nor who owns them (a touch leaf comes after every
+  /// The faces leaf c owns, in the order crossFaces walks them, into `out`. Touch leaves, which
+  /// crossFaces adds at excluded base cells, change neither which faces are minimal (a base-level
+  /// leaf where there was none is never finer) nor who owns them (a touch leaf comes after every
   /// leaf already there), so this list stays valid for the whole walk.
-  std::vector<OwnedFace> ownedFaces(std::int32_t c) const {
+  void ownedFaces(std::int32_t c, std::vector<OwnedFace>& out) const {
     const int level = tree_.level(c);
     // Per-thread scratch (ownedFaces runs in prefetchLeaf's tasks): no allocation per leaf.
     thread_local std::vector<std::int32_t> ci, position;
@@ -700,7 +720,7 @@ class AdaptiveCrossing {
       return across[slot];
     };
     std::array<Occupant, 4> around;
-    std::vector<OwnedFace> out;
+    out.clear();
     out.reserve(fixedAxes_.size() << k_);  // every face kind at most once: one allocation
     for (std::size_t a = 0; a < fixedAxes_.size(); ++a) {
       for (int side = 0; side < (1 << k_); ++side) {
@@ -708,7 +728,6 @@ class AdaptiveCrossing {
         out.push_back({static_cast<std::uint8_t>(a), static_cast<std::uint8_t>(side), around});
       }
     }
-    return out;
   }
 
   /// The lower corner of an owned face and the regions around it now: as recorded, except
@@ -870,7 +889,7 @@ class AdaptiveCrossing {
     };
     if (empty_[c] < 0) prepare();
     if ((empty_[c] < 0 ? out.empty : empty_[c]) == 1) return;
-    out.owned = ownedFaces(c);
+    ownedFaces(c, out.owned);
     // For m >= 2 (where faces are solved by evaluation) the leaf's affine model, built on the
     // first face not solved yet.
     LeafModel<S> model;
@@ -2068,6 +2087,7 @@ class AdaptiveCrossing {
   std::vector<std::uint8_t> unproven_, stuck_, singular_;
   std::vector<std::int8_t> graph_, faceGraph_;
   std::vector<LeafFaces> prefetched_;  ///< prefetchFaces, per leaf of the current window
+  std::vector<OwnedFace> owned_;       ///< crossFaces's ownedFaces of a leaf not prefetched
   CellMap<std::int32_t> touchLeaves_;  ///< the touch leaves of one crossFaces, by base key
   std::int32_t prefetchFrom_ = 0, prefetchEnd_ = 0;  ///< the leaves prefetched_ holds
   /// Leaves per window of prefetchFaces: enough tasks for many threads, a few MB of slots.

@@ -126,13 +126,21 @@ bool encloseSystem(std::vector<MidRadEvaluator<S>>& evaluators, std::span<const 
 template <class S>
 class FaceSolver {
  public:
-  FaceSolver(const System<S>& system, int maxDepth, std::vector<S> level, S slack)
-      : system_(system),
-        n_(system.n()),
-        m_(system.m()),
-        maxDepth_(maxDepth),
-        level_(std::move(level)),
-        slack_(std::move(slack)) {
+  FaceSolver(const System<S>& system, int maxDepth, std::span<const S> level, S slack) {
+    reset(system, maxDepth, level, std::move(slack));
+  }
+  /// A solver to reset() before use.
+  FaceSolver() = default;
+
+  /// Solves on `system` from now on, as if constructed so; the working storage of earlier
+  /// solves is kept (a solver reused face after face allocates nothing once warm).
+  void reset(const System<S>& system, int maxDepth, std::span<const S> level, S slack) {
+    system_ = &system;
+    n_ = system.n();
+    m_ = system.m();
+    maxDepth_ = maxDepth;
+    level_.assign(level.begin(), level.end());
+    slack_ = std::move(slack);
     f_.resize(m_);
     jacobian_.resize(std::size_t(m_) * n_);
   }
@@ -143,10 +151,11 @@ class FaceSolver {
   /// (full n-dim points) to `roots`; returns false if some root could not be proven unique.
   /// `margins[i]`: coefficients of F_i smaller than this in magnitude may have the wrong sign
   /// (the rounding bound of the Bernstein forms, docs/certificate.md).
-  bool solve(std::vector<S> point, std::vector<int> freeAxes, std::vector<Bernstein<S>>& patches,
-             FaceEnds ends, std::vector<std::vector<S>>& roots, std::span<const S> margins) {
-    point_ = std::move(point);
-    free_ = std::move(freeAxes);
+  bool solve(std::span<const S> point, std::span<const int> freeAxes,
+             std::vector<Bernstein<S>>& patches, const FaceEnds& ends,
+             std::vector<std::vector<S>>& roots, std::span<const S> margins) {
+    point_.assign(point.begin(), point.end());
+    free_.assign(freeAxes.begin(), freeAxes.end());
     margins_ = margins;
     certain_ = true;
     proven_ = true;
@@ -160,6 +169,10 @@ class FaceSolver {
     for (int i = 0; i < m_; ++i) {
       for (S& c : patches[i].coefficients()) c -= level_[i];
     }
+    // Two halves per depth of the recursion, sized before it (it holds references into them).
+    const auto depths = std::size_t(maxDepth_) * std::size_t(m_) + 1;
+    if (halves_.size() < 2 * depths) halves_.resize(2 * depths);
+    if (halfEnds_.size() < 2 * depths) halfEnds_.resize(2 * depths);
     recurse(patches, ends, 0, roots);
     return certain_;
   }
@@ -174,10 +187,11 @@ class FaceSolver {
   /// boxes, or when the Krawczyk test proves a root that Newton does not find inside: then
   /// solve() with the Bernstein slices decides the face (with its handling of tangencies and
   /// rounding). `face` is the box of the free coordinates; m >= 2.
-  bool solveByEvaluation(std::vector<S> point, std::vector<int> freeAxes, const Box<S>& face,
-                         FaceEnds ends, std::vector<std::vector<S>>& roots) {
-    point_ = std::move(point);
-    free_ = std::move(freeAxes);
+  bool solveByEvaluation(std::span<const S> point, std::span<const int> freeAxes,
+                         const Box<S>& face, const FaceEnds& ends,
+                         std::vector<std::vector<S>>& roots) {
+    point_.assign(point.begin(), point.end());
+    free_.assign(freeAxes.begin(), freeAxes.end());
     certain_ = true;
     proven_ = true;
     withinRounding_ = false;
@@ -213,7 +227,7 @@ class FaceSolver {
     // most boxes of the recursion are such, and damped Newton there runs to its limit).
     const Krawczyk k = krawczyk(patches);
     if (k == Krawczyk::kNone) return;
-    std::vector<S> root;
+    std::vector<S>& root = root_;  // not needed once the recursion goes deeper
     const bool found = newton(box, root) && inside(box, ends, root);
     if (found && (k == Krawczyk::kUnique || krawczykAround(root, box) == Krawczyk::kUnique)) {
       roots.push_back(fullPoint(root));
@@ -222,7 +236,7 @@ class FaceSolver {
     if (k == Krawczyk::kUnique && !found) {
       // The unique root lies in the closed face; if Newton did not reach it inside the
       // half-open face, it is on an upper boundary owned by the next face, or Newton strayed.
-      std::vector<S> y;
+      std::vector<S>& y = root_;
       if (newton(box, y) && insideClosed(box, y)) {
         proven_ = false;  // K proves the root interior, Newton puts it on the boundary
         return;           // owned by the neighbour face
@@ -245,9 +259,14 @@ class FaceSolver {
     }
     // Subdivide the face along its free axes in turn (half-open children).
     const int axis = depth % m_;
-    std::vector<Bernstein<S>> lower(patches.size()), upper(patches.size());
+    std::vector<Bernstein<S>>& lower = halves_[2 * std::size_t(depth)];
+    std::vector<Bernstein<S>>& upper = halves_[2 * std::size_t(depth) + 1];
+    lower.resize(patches.size());
+    upper.resize(patches.size());
     for (std::size_t i = 0; i < patches.size(); ++i) patches[i].halve(axis, lower[i], upper[i]);
-    FaceEnds lowerEnds = ends, upperEnds = ends;
+    FaceEnds& lowerEnds = halfEnds_[2 * std::size_t(depth)];
+    FaceEnds& upperEnds = halfEnds_[2 * std::size_t(depth) + 1];
+    lowerEnds = ends, upperEnds = ends;
     lowerEnds.upper[axis] = false;
     upperEnds.lower[axis] = false;
     recurse(lower, lowerEnds, depth + 1, roots);
@@ -370,7 +389,7 @@ class FaceSolver {
       centre_[free_[j]] = c;
       radius_[free_[j]] = std::max<S>(box.hi[j] - c, c - box.lo[j]) * up;
     }
-    return encloseSystem(threadEvaluators(system_), std::span<const S>(centre_),
+    return encloseSystem(threadEvaluators(*system_), std::span<const S>(centre_),
                          std::span<const S>(radius_), std::span<const S>(level_),
                          std::span<const int>(free_), jx_, fy_, excluded, stopWhenExcluded);
   }
@@ -384,7 +403,7 @@ class FaceSolver {
     std::vector<S> x = point_;
     const auto value = [&](const S& t) {
       x[free_[0]] = t;
-      system_.evaluate(x, f_, jacobian_);
+      system_->evaluate(x, f_, jacobian_);
       return f_[0];
     };
     S a = box.lo[0], b = box.hi[0];
@@ -410,7 +429,7 @@ class FaceSolver {
       if (step <= 4 * eps * (1 + abs(t)) || b - a <= 4 * eps * (1 + abs(t))) break;
     }
     x[free_[0]] = t;
-    roots.push_back(x);
+    roots.push_back(std::move(x));
   }
 
   /// The sign rule on an edge is a proof when the signs of F at both ends are (the end
@@ -421,15 +440,15 @@ class FaceSolver {
     using I = Interval<S>;
     const S& margin = margins_[0];
     const auto c = patch.coefficients();
-    std::vector<I> x;
-    x.reserve(n_);
+    std::vector<I>& x = intervalX_;
+    x.clear();
     for (int j = 0; j < n_; ++j) x.emplace_back(point_[j]);
     const Box<S>& box = patch.domain();
     for (int end = 0; end < 2; ++end) {
       using std::abs;
       if (abs(end ? c.back() : c.front()) > margin) continue;
       x[free_[0]] = I(end ? box.hi[0] : box.lo[0]);
-      const I v = system_.equations()[0].template evaluate<S>(std::span<const I>(x));
+      const I v = system_->equations()[0].template evaluate<S>(std::span<const I>(x));
       if (v.containsZero() && !(v.lower() == 0 && v.upper() == 0)) return false;
     }
     if (clearsRange(patch, S(0), S(0), margin)) return true;
@@ -442,7 +461,7 @@ class FaceSolver {
     // F >= 0 on the whole edge (it may touch 0, as along a line of M on a grid line): the
     // level set F = -delta of the sign rule does not meet it.
     x[free_[0]] = I(box.lo[0], box.hi[0]);
-    const I v = system_.equations()[0].template evaluate<S>(std::span<const I>(x));
+    const I v = system_->equations()[0].template evaluate<S>(std::span<const I>(x));
     return v.lower() >= 0 || v.upper() < 0;
   }
 
@@ -504,13 +523,18 @@ class FaceSolver {
       width = std::max<S>(width, box.hi[j] - box.lo[j]);
     }
     const S eps = ScalarTraits<S>::epsilon();
-    Matrix<S> jf(m_, m_);
-    Vector<S> rhs(m_);
-    std::vector<S> x = point_, trial(m_);
+    Matrix<S>& jf = newtonJ_;
+    Vector<S>& rhs = newtonRhs_;
+    std::vector<S>& x = newtonX_;
+    std::vector<S>& trial = newtonTrial_;
+    jf.resize(m_, m_);
+    rhs.resize(m_);
+    x.assign(point_.begin(), point_.end());
+    trial.resize(m_);
     // max_i |F_i - c_i| at the free coordinates `at`; the Jacobian columns into jf.
     const auto residual = [&](const std::vector<S>& at) {
       for (int j = 0; j < m_; ++j) x[free_[j]] = at[j];
-      system_.evaluate(x, f_, jacobian_);
+      system_->evaluate(x, f_, jacobian_);
       S r = 0;
       for (int i = 0; i < m_; ++i) {
         rhs(i) = f_[i] - level_[i];
@@ -531,7 +555,8 @@ class FaceSolver {
       for (int i = 0; i < m_; ++i) {
         for (int j = 0; j < m_; ++j) jf(i, j) = jacobian_[std::size_t(i) * n_ + free_[j]];
       }
-      Eigen::FullPivLU<Matrix<S>> lu(jf);
+      Eigen::FullPivLU<Matrix<S>>& lu = lu_;
+      lu.compute(jf);
       if (lu.rank() < m_) return false;
       const Vector<S> step = lu.solve(rhs);
       S size = 0, scale = 1;
@@ -570,8 +595,8 @@ class FaceSolver {
   /// interval arithmetic.
   bool residualWithinRounding(const std::vector<S>& y) const {
     using I = Interval<S>;
-    std::vector<I> xi;
-    xi.reserve(n_);
+    std::vector<I>& xi = roundingX_;
+    xi.clear();
     for (int j = 0; j < n_; ++j) xi.emplace_back(point_[j]);
     // The free coordinates widened by two units in the last place: the root itself need not
     // be representable (F - c is then never exactly 0 at a floating-point y).
@@ -582,7 +607,7 @@ class FaceSolver {
     }
     for (int i = 0; i < m_; ++i) {
       const I f =
-          system_.equations()[i].template evaluate<S>(std::span<const I>(xi)) - I(level_[i]);
+          system_->equations()[i].template evaluate<S>(std::span<const I>(xi)) - I(level_[i]);
       // Twice the enclosure's width: the evaluation order of F differs from the tape's.
       const S slack = f.upper() - f.lower();
       if (f.lower() - slack > 0 || f.upper() + slack < 0) return false;
@@ -608,14 +633,15 @@ class FaceSolver {
   /// (outward rounded; for boxes that are not a face patch's).
   void intervalJacobian(const Box<S>& box) {
     using I = Interval<S>;
-    std::vector<I> x;
-    x.reserve(n_);
+    std::vector<I>& x = intervalX_;
+    x.clear();
     for (int j = 0; j < n_; ++j) x.emplace_back(point_[j]);
     for (int j = 0; j < m_; ++j) x[free_[j]] = I(box.lo[j], box.hi[j]);
-    std::vector<I> gradient(n_);
+    std::vector<I>& gradient = gradient_;
+    gradient.resize(n_);
     jx_.resize(std::size_t(m_) * m_);
     for (int i = 0; i < m_; ++i) {
-      system_.equations()[i].template evaluate<S>(std::span<const I>(x), std::span<I>(gradient));
+      system_->equations()[i].template evaluate<S>(std::span<const I>(x), std::span<I>(gradient));
       for (int j = 0; j < m_; ++j) jx_[std::size_t(i) * m_ + j] = gradient[free_[j]];
     }
   }
@@ -623,11 +649,11 @@ class FaceSolver {
   /// Whether F_i - c_i, evaluated in interval arithmetic over the face box, excludes 0.
   bool intervalExcludes(const Box<S>& box, int i) const {
     using I = Interval<S>;
-    std::vector<I> x;
-    x.reserve(n_);
+    std::vector<I>& x = intervalX_;
+    x.clear();
     for (int j = 0; j < n_; ++j) x.emplace_back(point_[j]);
     for (int j = 0; j < m_; ++j) x[free_[j]] = I(box.lo[j], box.hi[j]);
-    const I f = system_.equations()[i].template evaluate<S>(std::span<const I>(x)) - I(level_[i]);
+    const I f = system_->equations()[i].template evaluate<S>(std::span<const I>(x)) - I(level_[i]);
     return !f.containsZero();
   }
 
@@ -656,29 +682,35 @@ class FaceSolver {
   /// K disjoint from X proves none.
   Krawczyk krawczyk(const Box<S>& box, const std::vector<Interval<S>>* given = nullptr) {
     using I = Interval<S>;
-    std::vector<S> y(m_);
+    std::vector<S>& y = krawczykY_;
+    y.resize(m_);
     for (int j = 0; j < m_; ++j) y[j] = (box.lo[j] + box.hi[j]) / 2;
-    std::vector<S> x = point_;
+    std::vector<S>& x = krawczykX_;
+    x.assign(point_.begin(), point_.end());
     for (int j = 0; j < m_; ++j) x[free_[j]] = y[j];
-    system_.evaluate(x, f_, jacobian_);
-    Matrix<S> jy(m_, m_);
+    system_->evaluate(x, f_, jacobian_);
+    Matrix<S>& jy = krawczykJ_;
+    jy.resize(m_, m_);
     for (int i = 0; i < m_; ++i) {
       for (int j = 0; j < m_; ++j) jy(i, j) = jacobian_[std::size_t(i) * n_ + free_[j]];
     }
-    Eigen::FullPivLU<Matrix<S>> lu(jy);
+    Eigen::FullPivLU<Matrix<S>>& lu = lu_;
+    lu.compute(jy);
     kLower_.clear(), kUpper_.clear();  // no operator (contract() needs one)
     if (lu.rank() < m_) return Krawczyk::kUnknown;
-    const Matrix<S> inverse = lu.inverse();
+    Matrix<S>& inverse = krawczykInverse_;
+    inverse = lu.inverse();
     // F(y) by interval evaluation at the point (unless given), so its rounding is enclosed.
-    std::vector<I> fy;
+    std::vector<I>& fy = krawczykFy_;
     if (given) {
-      fy = *given;
+      fy.assign(given->begin(), given->end());
     } else {
-      std::vector<I> xi;
-      xi.reserve(n_);
+      fy.clear();
+      std::vector<I>& xi = krawczykXi_;
+      xi.clear();
       for (int j = 0; j < n_; ++j) xi.emplace_back(x[j]);
       for (int i = 0; i < m_; ++i) {
-        fy.push_back(system_.equations()[i].template evaluate<S>(std::span<const I>(xi)) -
+        fy.push_back(system_->equations()[i].template evaluate<S>(std::span<const I>(xi)) -
                      I(level_[i]));
       }
     }
@@ -716,8 +748,8 @@ class FaceSolver {
     }
   }
 
-  const System<S>& system_;
-  int n_, m_, maxDepth_;
+  const System<S>* system_ = nullptr;
+  int n_ = 0, m_ = 0, maxDepth_ = 0;
   std::vector<S> level_;  ///< c: the crossings are those of F = c
   S slack_;               ///< how far outside the domain a crossing is still kept
   std::vector<S> point_;
@@ -742,6 +774,17 @@ class FaceSolver {
   /// Krawczyk contractions of one box before it is halved.
   static constexpr int kContractions = 8;
   std::vector<S> faceWidth_;  ///< solveByEvaluation's face widths, to pick the axis to halve
+  // Working storage kept across solves (each used by one function that calls no other user).
+  std::vector<std::vector<Bernstein<S>>> halves_;  ///< recurse's halves, two per depth
+  std::vector<FaceEnds> halfEnds_;                 ///< and their ends
+  std::vector<S> root_;                            ///< recurse's Newton root
+  std::vector<S> newtonX_, newtonTrial_;           ///< newton's point and trial step
+  Matrix<S> newtonJ_, krawczykJ_, krawczykInverse_;
+  Eigen::FullPivLU<Matrix<S>> lu_;
+  Vector<S> newtonRhs_;
+  std::vector<S> krawczykY_, krawczykX_;
+  std::vector<Interval<S>> krawczykFy_, krawczykXi_;
+  mutable std::vector<Interval<S>> intervalX_, roundingX_, gradient_;
 };
 
 }  // namespace ndc::crossing_detail
