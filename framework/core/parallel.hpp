@@ -14,6 +14,7 @@
 #include <tbb/task_arena.h>
 
 #include <cstddef>
+#include <optional>
 #include <type_traits>
 #include <utility>
 
@@ -85,15 +86,15 @@ void parallelSort(It first, It last, Less less) {
 /// vectors keep their capacity: a hot loop allocates nothing once warm. Two users that may be
 /// active at once on one thread need different tags; a user must not run a parallel loop while
 /// it holds its storage (the thread could start another task with the same user meanwhile).
-/// In MPFR, whose numbers keep the precision they were made with, it returns `fresh` (the
-/// caller's new object) instead.
+/// In MPFR, whose numbers keep the precision they were made with, it returns a new T made in
+/// `fresh` (the caller's, empty: in double nothing is constructed).
 template <class S, class Tag, class T>
-T& threadScratch(T& fresh) {
+T& threadScratch(std::optional<T>& fresh) {
   if constexpr (std::is_same_v<S, double>) {
     thread_local T scratch;
     return scratch;
   } else {
-    return fresh;
+    return fresh.emplace();
   }
 }
 

@@ -11,6 +11,7 @@
 #include <map>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <sstream>
 #include <type_traits>
 #include <unordered_map>
@@ -567,7 +568,7 @@ class AdaptiveCrossing {
                           Patches&& patches, std::span<const S> margins,
                           const LeafModel<S>* model = nullptr,
                           const FacePreconditioner<S>* pre = nullptr) const {
-    FaceWork fresh;
+    std::optional<FaceWork> fresh;
     FaceWork& w = threadScratch<S, FaceWork>(fresh);
     cellBoxInto(tree_.grid(tree_.level(leaf)), domain_, tree_.index(leaf), w.box);
     const Box<S>& box = w.box;

@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -20,10 +21,34 @@ NewtonProjection<S>::NewtonProjection(const System<S>& system, int maxIterations
   for (const Expression& e : system.equations()) magnitudes_.emplace_back(e.sharedTape());
 }
 
+namespace {
+
+/// residualTolerance's working storage (threadScratch).
+template <class S>
+struct ToleranceWork {
+  std::vector<S> absX, stack;
+};
+
+/// project's working storage (threadScratch): one projection allocates nothing once warm.
+template <class S>
+struct ProjectWork {
+  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+  using Vector = Eigen::Matrix<S, Eigen::Dynamic, 1>;
+  std::vector<S> f, jacobian, tol;
+  Matrix jac;
+  Vector rhs, step;
+  Eigen::CompleteOrthogonalDecomposition<Matrix> cod;
+};
+
+}  // namespace
+
 template <class S>
 void NewtonProjection<S>::residualTolerance(std::span<const S> x, std::span<S> tol) const {
   using std::abs;
-  std::vector<S> absX(x.size()), stack;
+  std::optional<ToleranceWork<S>> fresh;
+  ToleranceWork<S>& w = threadScratch<S, ToleranceWork<S>>(fresh);
+  std::vector<S>&absX = w.absX, &stack = w.stack;
+  absX.resize(x.size());
   for (std::size_t j = 0; j < x.size(); ++j) absX[j] = abs(x[j]);
   const S eps = ScalarTraits<S>::epsilon();
   for (std::size_t i = 0; i < magnitudes_.size(); ++i) {
@@ -40,10 +65,14 @@ ProjectedPoint<S> NewtonProjection<S>::project(std::span<S> x) const {
   const int n = system_->n(), m = system_->m();
   const S eps = ScalarTraits<S>::epsilon();
   const IterationGuard<S> guard{std::span<const S>(x)};
-  std::vector<S> f(m), jacobian(std::size_t(m) * n), tol(m);
-  Matrix jac(m, n);
-  Vector rhs(m);
-  Eigen::CompleteOrthogonalDecomposition<Matrix> cod(m, n);
+  std::optional<ProjectWork<S>> fresh;
+  ProjectWork<S>& w = threadScratch<S, ProjectWork<S>>(fresh);
+  std::vector<S>&f = w.f, &jacobian = w.jacobian, &tol = w.tol;
+  f.resize(m), jacobian.resize(std::size_t(m) * n), tol.resize(m);
+  Matrix& jac = w.jac;
+  Vector& rhs = w.rhs;
+  jac.resize(m, n), rhs.resize(m);
+  Eigen::CompleteOrthogonalDecomposition<Matrix>& cod = w.cod;
   // Relative rank threshold: singular values below 8 n eps of the largest count as zero.
   cod.setThreshold(S(8 * n) * eps);
 
@@ -83,7 +112,8 @@ ProjectedPoint<S> NewtonProjection<S>::project(std::span<S> x) const {
     cod.compute(jac);
     // A rank-deficient J has no minimum-norm Newton step that zeroes F.
     if (cod.rank() < m) return result;
-    const Vector step = cod.solve(rhs);
+    Vector& step = w.step;
+    step = cod.solve(rhs);
     S stepNorm = 0;
     for (int j = 0; j < n; ++j) {
       x[j] -= step(j);
