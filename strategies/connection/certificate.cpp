@@ -1,10 +1,13 @@
 #include "strategies/connection/certificate.hpp"
 
+#include "framework/core/parallel.hpp"
+
 #include <Eigen/Dense>
 #include <boost/multiprecision/eigen.hpp>
 
 #include <algorithm>
 #include <numeric>
+#include <optional>
 #include <type_traits>
 
 namespace ndc {
@@ -80,25 +83,50 @@ bool combinationExcludes(const System<S>& system, std::span<const S> level, cons
   return !g.containsZero();
 }
 
+namespace {
+
+/// GraphTest::graph's working storage (threadScratch).
+template <class S>
+struct GraphWork {
+  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+  Matrix mid;
+  Eigen::ColPivHouseholderQR<Matrix> qr;
+  std::vector<int> columns, pick;
+};
+
+/// GraphTest::regularSquare's working storage (threadScratch).
+template <class S>
+struct SquareWork {
+  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+  Matrix mid, inverse;
+  Eigen::FullPivLU<Matrix> lu;
+};
+
+}  // namespace
+
 template <class S>
 bool GraphTest<S>::graph(std::span<const Interval<S>> jacobian, std::span<const int> axes) {
   const int a = static_cast<int>(axes.size());
   if (a < m_) return false;
+  std::optional<GraphWork<S>> fresh;
+  GraphWork<S>& w = threadScratch<S, GraphWork<S>>(fresh);
   // The m pivot columns of the midpoint Jacobian first: the best conditioned block.
-  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
-  Matrix mid(m_, a);
+  auto& mid = w.mid;
+  mid.resize(m_, a);
   for (int i = 0; i < m_; ++i) {
     for (int t = 0; t < a; ++t) mid(i, t) = jacobian[std::size_t(i) * n_ + axes[t]].midpoint();
   }
-  const Eigen::ColPivHouseholderQR<Matrix> qr(mid);
-  std::vector<int> columns;
+  const auto& qr = w.qr.compute(mid);
+  std::vector<int>& columns = w.columns;
+  columns.clear();
   for (int t = 0; t < m_; ++t) columns.push_back(axes[qr.colsPermutation().indices()(t)]);
   if (regular(jacobian, columns)) return true;
   // A graph over the midpoint tangent space, which no coordinate block may be well placed for.
   if (tangentGraph(jacobian, axes)) return true;
   // Every other block: choose which a - m axes to drop.
   const int drop = a - m_;
-  std::vector<int> pick(drop);
+  std::vector<int>& pick = w.pick;
+  pick.resize(drop);
   std::iota(pick.begin(), pick.end(), 0);
   while (true) {
     columns.clear();
@@ -158,14 +186,17 @@ bool GraphTest<S>::regularSquare(int m, std::span<const Interval<S>> matrix, std
     return matrix[std::size_t(i) * stride + columns[t]];
   };
   if (m == 1) return !entry(0, 0).containsZero();
-  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
-  Matrix mid(m, m);
+  std::optional<SquareWork<S>> fresh;
+  SquareWork<S>& w = threadScratch<S, SquareWork<S>>(fresh);
+  auto& mid = w.mid;
+  mid.resize(m, m);
   for (int i = 0; i < m; ++i) {
     for (int t = 0; t < m; ++t) mid(i, t) = entry(i, t).midpoint();
   }
-  const Eigen::FullPivLU<Matrix> lu(mid);
+  const auto& lu = w.lu.compute(mid);
   if (lu.rank() < m) return false;
-  const Matrix y = lu.inverse();
+  auto& y = w.inverse;
+  y = lu.inverse();
   // || I - Y A ||_inf < 1, every entry enclosed with outward rounding; in double, one kernel
   // with one rounding-mode switch (the same bounds; the switches were most of this test's time).
   if constexpr (std::is_same_v<S, double>) {

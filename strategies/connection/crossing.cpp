@@ -33,24 +33,29 @@ namespace {
 
 using namespace crossing_detail;
 
-/// The m x n Jacobian of the system at x.
+/// The Jacobian at a point and its factorizations, in per-thread storage (threadScratch).
 template <class S>
-Matrix<S> jacobianAt(const System<S>& system, std::span<const S> x) {
-  const int m = system.m(), n = system.n();
-  std::vector<S> f(m), j(std::size_t(m) * n);
-  system.evaluate(x, f, j);
-  Matrix<S> out(m, n);
-  for (int r = 0; r < m; ++r) {
-    for (int c = 0; c < n; ++c) out(r, c) = j[std::size_t(r) * n + c];
-  }
-  return out;
-}
+struct JacobianWork {
+  std::vector<S> f, j;
+  Matrix<S> full, square;
+  Eigen::FullPivLU<Matrix<S>> lu;
+  Eigen::JacobiSVD<Matrix<S>> svd;
 
-/// Singular values of the Jacobian at x, largest first.
-template <class S>
-Vector<S> singularValuesAt(const System<S>& system, std::span<const S> x) {
-  return Eigen::JacobiSVD<Matrix<S>>(jacobianAt(system, x)).singularValues();
-}
+  /// The m x n Jacobian of the system at x, into `full`.
+  const Matrix<S>& jacobianAt(const System<S>& system, std::span<const S> x) {
+    const int m = system.m(), n = system.n();
+    f.resize(m), j.resize(std::size_t(m) * n);
+    system.evaluate(x, f, j);
+    full.resize(m, n);
+    for (int r = 0; r < m; ++r) {
+      for (int c = 0; c < n; ++c) full(r, c) = j[std::size_t(r) * n + c];
+    }
+    return full;
+  }
+
+  /// Singular values of `full`, largest first.
+  const Vector<S>& singularValues() { return svd.compute(full).singularValues(); }
+};
 
 /// The local degree of F on a face from its roots: the sum of the signs of the face Jacobian's
 /// determinant (columns of the free axes). A piece of M that dips through the face and back
@@ -63,15 +68,20 @@ template <class S>
 int faceDegree(const System<S>& system, const std::vector<std::vector<S>>& roots,
                const std::vector<int>& freeAxes) {
   const int m = system.m();
+  std::optional<JacobianWork<S>> fresh;
+  JacobianWork<S>& w = threadScratch<S, JacobianWork<S>>(fresh);
   int degree = 0;
   bool singular = false;
   for (const auto& r : roots) {
-    const Matrix<S> full = jacobianAt<S>(system, r);
-    Matrix<S> j(m, m);
+    const Matrix<S>& full = w.jacobianAt(system, std::span<const S>(r));
+    Matrix<S>& j = w.square;
+    j.resize(m, m);
     for (int col = 0; col < m; ++col) j.col(col) = full.col(freeAxes[col]);
-    const S det = Eigen::FullPivLU<Matrix<S>>(j).determinant();
+    const S det = w.lu.compute(j).determinant();
     degree += det > 0 ? 1 : (det < 0 ? -1 : 0);
-    const Vector<S> sigma = Eigen::JacobiSVD<Matrix<S>>(full).singularValues();
+    // One equation: one singular value, never below a tenth of itself.
+    if (m == 1) continue;
+    const Vector<S>& sigma = w.singularValues();
     singular = singular || sigma(m - 1) < sigma(0) / 10;
   }
   const int count = static_cast<int>(roots.size());
@@ -1972,7 +1982,10 @@ class AdaptiveCrossing {
     if (!d.converged) d.x = mean;
     if (d.piece != 0) return;
     const S width = S(tree_.grid(tree_.level(d.leaf)).cellWidth(0));
-    const Vector<S> sigma = singularValuesAt<S>(in_.system, d.x);
+    std::optional<JacobianWork<S>> fresh;
+    JacobianWork<S>& w = threadScratch<S, JacobianWork<S>>(fresh);
+    w.jacobianAt(in_.system, std::span<const S>(d.x));
+    const Vector<S>& sigma = w.singularValues();
     d.singular = sigma(0) == 0 || sigma(m_ - 1) <= sigma(0) * width * 1e-3;
   }
 
