@@ -68,6 +68,15 @@ Occupant CellTree::find(int level, std::span<const std::int32_t> index) const {
     out.key = outside;
     return out;
   }
+  // A leaf of the level itself first (the common case: a neighbour of the same size); leaves
+  // do not overlap, so no coarser leaf holds the region then.
+  if (level > base_) {
+    if (const std::int32_t* leaf = leaves_[level - base_].find(grid(level).pack(index))) {
+      out.kind = Occupant::Kind::kLeaf;
+      out.leaf = *leaf;
+      return out;
+    }
+  }
   // From the base level down: the first leaf met holds the region; a level where the cell is
   // neither a leaf nor internal is a region the subdivision excluded.
   thread_local std::vector<std::int32_t> at;
