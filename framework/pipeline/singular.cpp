@@ -14,6 +14,7 @@
 #include "framework/core/bernstein.hpp"
 #include "framework/core/cell_forms.hpp"
 #include "framework/core/iteration.hpp"
+#include "framework/core/parallel.hpp"
 #include "strategies/projection/newton.hpp"
 
 namespace ndc {
@@ -93,10 +94,18 @@ class Search {
   SingularSearch run();
 
  private:
-  const Block<S>& blockFor(std::span<const std::int32_t> cell);
+  /// The Bernstein data of the block of `cell`, whose root forms are `root` (pure: blocks are
+  /// made in parallel).
+  Block<S> makeBlock(std::span<const std::int32_t> cell,
+                     const std::vector<Bernstein<S>>& root) const;
   const std::vector<Bernstein<S>>& rootFor(std::span<const std::int32_t> cell);
   CellKey blockKey(std::span<const std::int32_t> cell) const;
-  bool excluded(std::span<const std::int32_t> cell, SingularSearch& out);
+  /// Which test of step 1 excludes rank deficiency on `cell` (in `block`); the row norms of
+  /// J at its centre into `norms` (for the gradient scales). Reads only, so the cells are
+  /// tested in parallel.
+  enum class Exclusion : std::uint8_t { kNone, kLipschitz, kEnclosure };
+  Exclusion excluded(std::span<const std::int32_t> cell, const Block<S>& block,
+                     std::span<S> norms) const;
   /// Step 1: the cells where rank deficiency cannot be excluded, in cell order.
   std::vector<std::int32_t> findCandidates(SingularSearch& out);
   /// Step 2: clusters of face-adjacent candidates within one block, as positions in
@@ -151,18 +160,15 @@ const std::vector<Bernstein<S>>& Search<S>::rootFor(std::span<const std::int32_t
 }
 
 template <class S>
-const Block<S>& Search<S>::blockFor(std::span<const std::int32_t> cell) {
+Block<S> Search<S>::makeBlock(std::span<const std::int32_t> cell,
+                              const std::vector<Bernstein<S>>& root) const {
   using std::abs;
   using std::max;
   using std::sqrt;
-  const CellKey key = blockKey(cell);
-  auto it = blocks_.find(key);
-  if (it != blocks_.end()) return it->second;
   const int shift = grid_.depth - blockLevel_;
   std::vector<std::int32_t> index(n_);
   for (int j = 0; j < n_; ++j) index[j] = cell[j] >> shift;
   const Box<S> box = cellBox<S>(Grid{n_, blockLevel_, grid_.domain}, domain_, index);
-  const std::vector<Bernstein<S>>& root = rootFor(cell);
   const auto largest = [](const Bernstein<S>& p) {
     S worst = 0;
     for (const S& c : p.coefficients()) worst = max<S>(worst, abs(c));
@@ -185,11 +191,12 @@ const Block<S>& Search<S>::blockFor(std::span<const std::int32_t> cell) {
     }
     block.lipschitz[i] = sqrt(frobenius);
   }
-  return blocks_.emplace(key, std::move(block)).first->second;
+  return block;
 }
 
 template <class S>
-bool Search<S>::excluded(std::span<const std::int32_t> cell, SingularSearch& out) {
+typename Search<S>::Exclusion Search<S>::excluded(std::span<const std::int32_t> cell,
+                                                  const Block<S>& block, std::span<S> norms) const {
   using std::abs;
   using std::sqrt;
   const Box<S> box = cellBox<S>(grid_, domain_, cell);
@@ -201,30 +208,28 @@ bool Search<S>::excluded(std::span<const std::int32_t> cell, SingularSearch& out
     radius2 += half * half;
   }
   const S radius = sqrt(radius2);
-  system_.evaluate(centre, f_, jac_);
+  std::vector<S> f(m_), jac(std::size_t(m_) * n_);
+  system_.evaluate(centre, f, jac);
   // The row scaling D at the centre; the gradient scales s_i.
   std::vector<S> d(m_);
   Matrix<S> a(m_, n_);
   for (int i = 0; i < m_; ++i) {
     S norm2 = 0;
     for (int j = 0; j < n_; ++j)
-      norm2 += jac_[std::size_t(i) * n_ + j] * jac_[std::size_t(i) * n_ + j];
+      norm2 += jac[std::size_t(i) * n_ + j] * jac[std::size_t(i) * n_ + j];
     const S norm = sqrt(norm2);
-    if (isFinite(norm) && norm > scale_[i]) scale_[i] = norm;
+    norms[i] = norm;
     d[i] = norm > 0 && isFinite(norm) ? S(1 / norm) : S(1);
-    for (int j = 0; j < n_; ++j) a(i, j) = d[i] * jac_[std::size_t(i) * n_ + j];
+    for (int j = 0; j < n_; ++j) a(i, j) = d[i] * jac[std::size_t(i) * n_ + j];
   }
   const S relative = S(1e-8), absolute = S(1e3) * eps_;
-  const Block<S>& block = blockFor(cell);
 
   // Test 1 (Weyl): ||D (J(x) - J(c))||_2 <= |x - c| ||D L|| on the cell.
   const auto [sigmaMin, sigmaMax] = sigmaRange<S>(a);
   S lip2 = 0;
   for (int i = 0; i < m_; ++i) lip2 += d[i] * d[i] * block.lipschitz[i] * block.lipschitz[i];
-  if (isFinite(sigmaMin) && sigmaMin > sqrt(lip2) * radius * (1 + relative) + absolute * sigmaMax) {
-    ++out.excludedByLipschitz;
-    return true;
-  }
+  if (isFinite(sigmaMin) && sigmaMin > sqrt(lip2) * radius * (1 + relative) + absolute * sigmaMax)
+    return Exclusion::kLipschitz;
 
   // Test 2 (Weyl): J(x) in [A - R, A + R] entrywise, from the Bernstein form on the cell.
   Matrix<S> mid(m_, n_), rad(m_, n_);
@@ -235,21 +240,17 @@ bool Search<S>::excluded(std::span<const std::int32_t> cell, SingularSearch& out
       const auto [lo, hi] = form.derivative(j).coefficientRange();
       const S slope = block.slope[std::size_t(i) * n_ + j];
       // m = 1: a partial derivative of one strict sign on the cell proves grad F != 0.
-      if (m_ == 1 && (lo > absolute * slope || hi < -absolute * slope)) {
-        ++out.excludedByEnclosure;
-        return true;
-      }
+      if (m_ == 1 && (lo > absolute * slope || hi < -absolute * slope))
+        return Exclusion::kEnclosure;
       mid(i, j) = d[i] * (lo + hi) / 2;
       rad(i, j) = d[i] * (hi - lo) / 2;
       slope2 += d[i] * d[i] * slope * slope;
     }
   }
   const S midMin = sigmaRange<S>(mid).first;
-  if (isFinite(midMin) && midMin > rad.norm() * (1 + relative) + absolute * sqrt(slope2)) {
-    ++out.excludedByEnclosure;
-    return true;
-  }
-  return false;
+  if (isFinite(midMin) && midMin > rad.norm() * (1 + relative) + absolute * sqrt(slope2))
+    return Exclusion::kEnclosure;
+  return Exclusion::kNone;
 }
 
 template <class S>
@@ -422,10 +423,41 @@ SingularSearch Search<S>::run() {
 
 template <class S>
 std::vector<std::int32_t> Search<S>::findCandidates(SingularSearch& out) {
-  // Step 1: candidate cells, where rank deficiency cannot be excluded.
+  // Step 1: candidate cells, where rank deficiency cannot be excluded. The blocks first, in
+  // cell order (the root forms are made on first use), each block's data in parallel.
+  const std::size_t count = cells_.size();
+  std::vector<std::size_t> firsts;  // the first cell of each new block
+  std::vector<const std::vector<Bernstein<S>>*> roots;
+  CellMap<std::size_t> pending;
+  for (std::size_t c = 0; c < count; ++c) {
+    const CellKey key = blockKey(cells_.cell(c));
+    if (blocks_.count(key) || !pending.emplace(key, firsts.size()).second) continue;
+    firsts.push_back(c);
+    roots.push_back(&rootFor(cells_.cell(c)));
+  }
+  std::vector<Block<S>> made(firsts.size());
+  parallelFor(firsts.size(),
+              [&](std::size_t b) { made[b] = makeBlock(cells_.cell(firsts[b]), *roots[b]); });
+  for (std::size_t b = 0; b < firsts.size(); ++b)
+    blocks_.emplace(blockKey(cells_.cell(firsts[b])), std::move(made[b]));
+  // Then the cells' tests in parallel, each into its slots, merged in cell order.
+  std::vector<Exclusion> result(count);
+  std::vector<S> norms(count * std::size_t(m_));
+  parallelFor(count, [&](std::size_t c) {
+    const auto cell = cells_.cell(c);
+    result[c] = excluded(cell, blocks_.at(blockKey(cell)),
+                         std::span<S>(norms).subspan(c * std::size_t(m_), std::size_t(m_)));
+  });
   std::vector<std::int32_t> candidates;
-  for (std::size_t c = 0; c < cells_.size(); ++c)
-    if (!excluded(cells_.cell(c), out)) candidates.push_back(static_cast<std::int32_t>(c));
+  for (std::size_t c = 0; c < count; ++c) {
+    for (int i = 0; i < m_; ++i) {
+      const S& norm = norms[c * std::size_t(m_) + std::size_t(i)];
+      if (isFinite(norm) && norm > scale_[i]) scale_[i] = norm;
+    }
+    if (result[c] == Exclusion::kLipschitz) ++out.excludedByLipschitz;
+    if (result[c] == Exclusion::kEnclosure) ++out.excludedByEnclosure;
+    if (result[c] == Exclusion::kNone) candidates.push_back(static_cast<std::int32_t>(c));
+  }
   out.candidates = static_cast<std::int64_t>(candidates.size());
   return candidates;
 }
