@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "framework/applications/load.hpp"
+#include "framework/core/parallel.hpp"
 #include "framework/core/problem.hpp"
 #include "framework/core/system.hpp"
 #include "framework/pipeline/pipeline.hpp"
@@ -217,6 +218,33 @@ TEMPLATE_TEST_CASE("singular: Steinmetz curve, two double points", "[singular]",
   const std::vector<double> w = cellWidths(steinmetz, depth);
   CHECK(within(points[0].point, {-1, 0, 0}, w));
   CHECK(within(points[1].point, {1, 0, 0}, w));
+}
+
+TEMPLATE_TEST_CASE("singular: the same points, bit for bit, on 1, 2 and 3 threads",
+                   "[singular][threads]", NDC_SCALARS) {
+  // Step 1 tests the cells in parallel and merges their gradient scales in cell order, which
+  // step 3 divides by: any dependence on the schedule would move the located points' last bits.
+  const Problem steinmetz =
+      inlineProblem({"x", "y", "z"}, {{-1.1, 1.13}, {-1.07, 1.1}, {-1.1, 1.1}},
+                    {"x^2 + y^2 - 1", "x^2 + z^2 - 1"});
+  const Problem cone = cube({"x^2 + y^2 - z^2"});
+  for (const Problem* problem : {&steinmetz, &cone}) {
+    const auto pointsOn = [&](int threads) {
+      return ndc::withThreads(threads, [&] { return run<TestType>(*problem, 5); })
+          .summary.singularPoints;
+    };
+    const std::vector<ndc::SingularPoint> one = pointsOn(1);
+    CHECK(!one.empty());
+    for (const int threads : {2, 3}) {
+      INFO(problem->name << " on " << threads << " threads");
+      const std::vector<ndc::SingularPoint> other = pointsOn(threads);
+      REQUIRE(other.size() == one.size());
+      for (std::size_t p = 0; p < one.size(); ++p) {
+        CHECK(other[p].point == one[p].point);
+        CHECK(other[p].sigmaMin == one[p].sigmaMin);
+      }
+    }
+  }
 }
 
 TEMPLATE_TEST_CASE("singular: smooth manifolds report none", "[singular]", NDC_SCALARS) {

@@ -8,9 +8,11 @@
 #include <algorithm>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <random>
 #include <regex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "framework/applications/load.hpp"
@@ -131,6 +133,31 @@ TEST_CASE("threads: runPipeline gives the same result with 1 and 2 threads", "[t
   CHECK(two.summary.visited == one.summary.visited);
   CHECK(two.summary.topology.certified == one.summary.topology.certified);
   CHECK(two.summary.mesh.maxChordError == one.summary.mesh.maxChordError);
+}
+
+TEST_CASE("threads: threadScratch keeps one object per thread and user in double, none in MPFR",
+          "[threads]") {
+  struct User {};
+  struct Other {};
+  std::optional<std::vector<int>> fresh;
+  std::vector<int>& mine = ndc::threadScratch<double, User>(fresh);
+  CHECK(!fresh);  // double: nothing made in the caller's storage
+  mine.assign(100, 7);
+  const int* storage = mine.data();
+  // The same object again on this thread, with its storage; another user has its own.
+  CHECK(&ndc::threadScratch<double, User>(fresh) == &mine);
+  CHECK(ndc::threadScratch<double, User>(fresh).data() == storage);
+  CHECK(&ndc::threadScratch<double, Other>(fresh) != &mine);
+  // Another thread has its own.
+  const std::vector<int>* theirs = nullptr;
+  std::thread([&] { theirs = &ndc::threadScratch<double, User>(fresh); }).join();
+  CHECK(theirs != &mine);
+  // MPFR: a new object in the caller's storage every time.
+  std::optional<std::vector<int>> mpfr;
+  std::vector<int>& made = ndc::threadScratch<ndc::Mpfr, User>(mpfr);
+  REQUIRE(mpfr);
+  CHECK(&made == &*mpfr);
+  CHECK(made.empty());
 }
 
 TEST_CASE("threads: parallelSort gives std::sort's order on 1, 2 and 3 threads", "[threads]") {
