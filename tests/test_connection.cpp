@@ -147,7 +147,7 @@ struct Scene {
           d2 += e * e;
         }
         if (!inside || d2 > delta * delta) continue;
-        if (!cells.lookup.count(cells.grid.pack(idx))) cells.add(idx);
+        if (cells.find(cells.grid.pack(idx)) < 0) cells.add(idx);
       }
     }
   }
@@ -428,8 +428,10 @@ TEMPLATE_TEST_CASE("paper connection bridges a circle through a grid vertex", "[
   scene.projectAndClassify();
   // The cells (11, 9) and (12, 10) touch the circle only at the vertex (0.5, 0.25).
   const std::int32_t touchLow[2] = {11, 9}, touchHigh[2] = {12, 10};
-  const auto low = scene.cells.lookup.at(scene.cells.grid.pack(touchLow));
-  const auto high = scene.cells.lookup.at(scene.cells.grid.pack(touchHigh));
+  const auto low = scene.cells.find(scene.cells.grid.pack(touchLow));
+  const auto high = scene.cells.find(scene.cells.grid.pack(touchHigh));
+  REQUIRE(low >= 0);
+  REQUIRE(high >= 0);
   CHECK(scene.classes[low] == CellClass::kAbnormal);
   CHECK(scene.classes[high] == CellClass::kAbnormal);
 

@@ -35,14 +35,13 @@ std::int32_t SolutionCells::neighbour(std::size_t c, int axis, int sign) const {
   const std::int32_t i = index[c * grid.n + axis] + sign;
   if (i < 0 || i >= grid.cellsPerAxis()) return -1;
   const CellKey key = grid.neighbour(grid.pack(cell(c)), axis, sign);
-  auto it = lookup.find(key);
-  return it == lookup.end() ? -1 : it->second;
+  return find(key);
 }
 
 void SolutionCells::add(std::span<const std::int32_t> cellIndex) {
   const auto number = static_cast<std::int32_t>(size());
   index.insert(index.end(), cellIndex.begin(), cellIndex.end());
-  lookup.emplace(grid.pack(cellIndex), number);
+  lookup.insert(grid.pack(cellIndex), number);
 }
 
 }  // namespace ndc

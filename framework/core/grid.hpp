@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "framework/core/box.hpp"
+#include "framework/core/flat_map.hpp"
 
 namespace ndc {
 
@@ -89,9 +90,9 @@ Box<S> cellBox(const Grid& grid, const Box<S>& domain, std::span<const std::int3
 /// The solution cells: final-depth boxes the subdivision could not discard.
 struct SolutionCells {
   Grid grid;
-  std::int64_t visited = 0;         ///< boxes the subdivision bounded
-  std::vector<std::int32_t> index;  ///< n ints per cell, cell c at [c n, (c+1) n)
-  CellMap<std::int32_t> lookup;     ///< packed index -> cell number
+  std::int64_t visited = 0;               ///< boxes the subdivision bounded
+  std::vector<std::int32_t> index;        ///< n ints per cell, cell c at [c n, (c+1) n)
+  FlatMap<CellKey, std::int32_t> lookup;  ///< packed index -> cell number
 
   std::size_t size() const { return grid.n ? index.size() / grid.n : 0; }
   std::span<const std::int32_t> cell(std::size_t c) const {
@@ -100,6 +101,11 @@ struct SolutionCells {
   /// Cell number of the face neighbour of cell c across `axis` in direction `sign` (+1/-1),
   /// or -1 when that neighbour is not a solution cell or lies outside the grid.
   std::int32_t neighbour(std::size_t c, int axis, int sign) const;
+  /// The number of the cell with packed index `key`, or -1.
+  std::int32_t find(CellKey key) const {
+    const std::int32_t* number = lookup.find(key);
+    return number ? *number : -1;
+  }
   /// Appends a cell (its key must be new).
   void add(std::span<const std::int32_t> cellIndex);
 };
