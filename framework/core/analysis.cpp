@@ -190,13 +190,16 @@ Complex<S> weld(const Complex<S>& complex, double tolerance) {
   const std::size_t count = complex.simplexCount();
   std::vector<std::int32_t> sorted(count * width);
   std::vector<std::uint8_t> keep(count, 1);
-  for (std::size_t s = 0; s < count; ++s) {
-    const auto key = sorted.begin() + std::ptrdiff_t(s * width);
-    for (std::size_t i = 0; i < width; ++i) key[i] = remap[complex.simplices[s * width + i]];
-    std::sort(key, key + std::ptrdiff_t(width));
-    if (std::adjacent_find(key, key + std::ptrdiff_t(width)) != key + std::ptrdiff_t(width))
-      keep[s] = 0;
-  }
+  parallelFor(
+      count,
+      [&](std::size_t s) {
+        const auto key = sorted.begin() + std::ptrdiff_t(s * width);
+        for (std::size_t i = 0; i < width; ++i) key[i] = remap[complex.simplices[s * width + i]];
+        std::sort(key, key + std::ptrdiff_t(width));
+        if (std::adjacent_find(key, key + std::ptrdiff_t(width)) != key + std::ptrdiff_t(width))
+          keep[s] = 0;
+      },
+      4096);
   markDuplicates(sorted, width, keep);
   std::vector<std::int32_t> simplex(width);
   for (std::size_t s = 0; s < count; ++s) {

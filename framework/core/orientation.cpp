@@ -55,16 +55,18 @@ bool orientSimplices(int k, std::vector<std::int32_t>& simplices) {
   const std::size_t count = simplices.size() / width;
   // Facet -> the simplices on it: the facets of all simplices sorted by key (then simplex),
   // so that those on one facet are adjacent (no hash node or vector per facet).
-  std::vector<FacetEntry> entries;
-  entries.reserve(count * width);
-  for (std::size_t s = 0; s < count; ++s) {
-    const auto facets = facetsOf(k, &simplices[s * width]);
-    for (int i = 0; i < width; ++i) {
-      const std::uint64_t key =
-          (std::uint64_t(std::uint32_t(facets[i].key[0])) << 32) | std::uint32_t(facets[i].key[1]);
-      entries.push_back({key, static_cast<std::uint32_t>(s), i, facets[i].sign});
-    }
-  }
+  std::vector<FacetEntry> entries(count * width);
+  parallelFor(
+      count,
+      [&](std::size_t s) {
+        const auto facets = facetsOf(k, &simplices[s * width]);
+        for (int i = 0; i < width; ++i) {
+          const std::uint64_t key = (std::uint64_t(std::uint32_t(facets[i].key[0])) << 32) |
+                                    std::uint32_t(facets[i].key[1]);
+          entries[s * width + i] = {key, static_cast<std::uint32_t>(s), i, facets[i].sign};
+        }
+      },
+      4096);
   // (key, simplex) is unique: a simplex's facets are distinct once degenerate ones are welded
   // away, and the facet number breaks the tie otherwise; so the order is total.
   parallelSort(entries.begin(), entries.end(), [](const FacetEntry& a, const FacetEntry& b) {
@@ -73,14 +75,22 @@ bool orientSimplices(int k, std::vector<std::int32_t>& simplices) {
   });
   // For each facet i of simplex s: the entry of the other simplex on it when exactly two
   // simplices share it, else -1 (boundary or non-manifold: nothing to agree with).
+  // Each pair is found from its first entry, so the entries are looked at in parallel.
   std::vector<std::int64_t> across(count * width, -1);
-  for (std::size_t b = 0, e = 0; b < entries.size(); b = e) {
-    e = b + 1;
-    while (e < entries.size() && entries[e].key == entries[b].key) ++e;
-    if (e - b != 2) continue;
-    across[std::size_t(entries[b].simplex) * width + entries[b].facet] = std::int64_t(b + 1);
-    across[std::size_t(entries[b + 1].simplex) * width + entries[b + 1].facet] = std::int64_t(b);
-  }
+  const auto sameKey = [&](std::size_t a, std::size_t b) {
+    return entries[a].key == entries[b].key;
+  };
+  parallelFor(
+      entries.size(),
+      [&](std::size_t b) {
+        if (b > 0 && sameKey(b - 1, b)) return;  // not the first of its facet
+        if (b + 1 >= entries.size() || !sameKey(b, b + 1)) return;
+        if (b + 2 < entries.size() && sameKey(b, b + 2)) return;  // more than two
+        across[std::size_t(entries[b].simplex) * width + entries[b].facet] = std::int64_t(b + 1);
+        across[std::size_t(entries[b + 1].simplex) * width + entries[b + 1].facet] =
+            std::int64_t(b);
+      },
+      4096);
   // Breadth-first per component: flip[s] = -1 when s is to be reversed.
   std::vector<int> flip(count, 0);
   bool orientable = true;

@@ -1929,6 +1929,11 @@ class AdaptiveCrossing {
     // Dual vertices: the Newton projection of the mean of each piece's crossings.
     const std::vector<DualVertex> vertices = dualVertices(incident, piece, pieceCount, slotOf);
     std::vector<std::int32_t> firstVertex(count, -1);
+    // Room for every vertex and simplex at once (a quad gives two triangles).
+    out.complex.vertices.reserve(out.complex.vertices.size() + vertices.size() * std::size_t(n_));
+    out.complex.vertexCell.reserve(out.complex.vertexCell.size() + vertices.size());
+    out.complex.simplices.reserve(out.complex.simplices.size() +
+                                  mesh.size() * std::size_t(k_ == 2 ? 2 : 1) * std::size_t(k_ + 1));
     for (const DualVertex& d : vertices) {
       if (!d.converged) ++out.offManifoldVertices;  // reported, never written silently off M
       const std::int32_t v = out.complex.addVertex(d.x, tree_.baseCell(d.leaf));
