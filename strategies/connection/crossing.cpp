@@ -900,19 +900,34 @@ class AdaptiveCrossing {
   void prefetchLeaf(std::int32_t c, const RootForms& rf, LeafFaces& out) const {
     std::vector<Bernstein<S>> own;
     std::vector<Bernstein<S>>& patches = leafScratch(own);
+    bool restricted = false;
     const auto prepare = [&] {
-      if (out.empty >= 0) return;
+      if (restricted) return;
+      restricted = true;
       bool band = false;
-      out.empty = restrictLeaf(c, rf, patches, band) ? 1 : 0;
-      out.band = band ? 1 : 0;
+      const bool empty = restrictLeaf(c, rf, patches, band);
+      if (out.empty < 0) out.empty = empty ? 1 : 0, out.band = band ? 1 : 0;
     };
-    if (empty_[c] < 0) prepare();
-    if ((empty_[c] < 0 ? out.empty : empty_[c]) == 1) return;
-    ownedFaces(c, out.owned);
     // For m >= 2 (where faces are solved by evaluation) the leaf's affine model, built on the
-    // first face not solved yet.
+    // first face not solved yet, or for the emptiness test.
     LeafModel<S> model;
     bool modelled = false;
+    const auto buildModel = [&] {
+      if (modelled) return;
+      buildLeafModel(threadEvaluators(in_.system), leafBox(c), std::span<const S>(level_), model);
+      modelled = true;
+    };
+    if (empty_[c] < 0) {
+      // A leaf where every F_i - c_i provably takes both signs is not empty by its Bernstein
+      // forms either: its patches are restricted only if a face needs them.
+      if (m_ > 1 && byEvaluation_) {
+        buildModel();
+        if (levelsMet(model, leafBox(c))) out.empty = 0, out.band = 0;
+      }
+      if (out.empty < 0) prepare();
+    }
+    if ((empty_[c] < 0 ? out.empty : empty_[c]) == 1) return;
+    ownedFaces(c, out.owned);
     // The Krawczyk preconditioners of the faces' axis choices, each built on first use.
     thread_local std::vector<FacePreconditioner<S>> pre;
     thread_local std::vector<std::uint8_t> built;
@@ -925,10 +940,7 @@ class AdaptiveCrossing {
         prepare();
         return patches;
       };
-      if (m_ > 1 && byEvaluation_ && !modelled) {
-        buildLeafModel(threadEvaluators(in_.system), leafBox(c), std::span<const S>(level_), model);
-        modelled = true;
-      }
+      if (m_ > 1 && byEvaluation_) buildModel();
       if (modelled && !built[f.a]) {
         buildFacePreconditioner(model, std::span<const int>(fixedAxes_[f.a].data(), k_), pre[f.a]);
         built[f.a] = 1;
@@ -937,6 +949,37 @@ class AdaptiveCrossing {
           key, solveFace(c, fixedAxes_[f.a], f.side, restricted, rf.margins,
                          modelled ? &model : nullptr, modelled ? &pre[f.a] : nullptr));
     }
+  }
+
+  /// Whether every F_i - c_i provably takes both signs on the leaf `box` of `model`: its sign
+  /// at the centre (the model's value), and the opposite one at the corner where the model's
+  /// gradient points away from it (a midpoint-radius run at that corner). Then no Bernstein form
+  /// of the leaf clears its level (the coefficients' hull holds the range, within the rounding
+  /// margin), so the leaf is not empty, and restricting its forms to find that out is spared.
+  bool levelsMet(const LeafModel<S>& model, const Box<S>& box) const {
+    using std::abs;
+    if (!model.valid) return false;
+    std::vector<MidRadEvaluator<S>>& evaluators = threadEvaluators(in_.system);
+    thread_local std::vector<S> corner, zero;
+    corner.resize(n_);
+    zero.assign(n_, S(0));
+    const S eps = 2 * ScalarTraits<S>::epsilon();
+    for (int i = 0; i < m_; ++i) {
+      const S& mid = model.valueMid[i];
+      const S& rad = model.valueRad[i];
+      if (!(mid - rad > 0) && !(mid + rad < 0)) return false;  // F_i at the centre is near c_i
+      const bool positive = mid - rad > 0;
+      for (int j = 0; j < n_; ++j) {
+        const S& g = model.gradMid[std::size_t(i) * n_ + j];
+        corner[j] = (g > 0) == positive ? box.lo[j] : box.hi[j];
+      }
+      MidRadEvaluator<S>& e = evaluators[i];
+      if (!e.run(std::span<const S>(corner), std::span<const S>(zero), false)) return false;
+      const S value = e.mid(0) - level_[i];
+      const S radius = e.rad(0) + eps * abs(value);
+      if (positive ? !(value + radius < 0) : !(value - radius > 0)) return false;
+    }
+    return true;
   }
 
   /// Records a solved face: flags its leaves when the face is not proven, and adds its
