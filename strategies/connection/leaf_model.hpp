@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -16,6 +17,7 @@
 #include "framework/core/box.hpp"
 #include "framework/core/iteration.hpp"
 #include "framework/core/midrad.hpp"
+#include "framework/core/parallel.hpp"
 #include "framework/core/scalar.hpp"
 
 namespace ndc {
@@ -142,6 +144,14 @@ struct FacePreconditioner {
   bool valid = false;
 };
 
+/// buildFacePreconditioner's working storage (threadScratch).
+template <class S>
+struct PreconditionerWork {
+  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+  Matrix mid, inverse;
+  Eigen::FullPivLU<Matrix> lu;
+};
+
 /// Builds `out` for the faces of the model's leaf that fix `axes` (k of them).
 template <class S>
 void buildFacePreconditioner(const LeafModel<S>& model, std::span<const int> axes,
@@ -157,13 +167,17 @@ void buildFacePreconditioner(const LeafModel<S>& model, std::span<const int> axe
       out.free.push_back(static_cast<int>(j));
   }
   if (out.free.size() != m) return;
-  Matrix mid(m, m);
+  std::optional<PreconditionerWork<S>> fresh;
+  PreconditionerWork<S>& w = threadScratch<S, PreconditionerWork<S>>(fresh);
+  Matrix& mid = w.mid;
+  mid.resize(Eigen::Index(m), Eigen::Index(m));
   for (std::size_t i = 0; i < m; ++i) {
     for (std::size_t t = 0; t < m; ++t) mid(i, t) = model.gradMid[i * n + out.free[t]];
   }
-  const Eigen::FullPivLU<Matrix> lu(mid);
+  const Eigen::FullPivLU<Matrix>& lu = w.lu.compute(mid);
   if (lu.rank() < static_cast<Eigen::Index>(m)) return;
-  const Matrix inverse = lu.inverse();
+  Matrix& inverse = w.inverse;
+  inverse = lu.inverse();
   out.y.resize(m * m);
   for (std::size_t l = 0; l < m; ++l) {
     for (std::size_t i = 0; i < m; ++i) out.y[l * m + i] = inverse(l, i);
