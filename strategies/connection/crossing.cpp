@@ -269,7 +269,7 @@ struct FaceRecord {
 /// faces a leaf owns one after the other, so each leaf's records form one block of a flat
 /// array, sorted by kind: keeping a face inserts it into the last block (nothing is allocated
 /// per face, nothing is hashed), and finding one is a binary search of its leaf's block (up to
-/// 4 C(n, 2) records: 60 in R^6, where a scan of the block per face was most of the walk).
+/// 4 C(n, 2) records: 60 in R^6).
 template <class S>
 class FaceStore {
  public:
@@ -559,13 +559,8 @@ class AdaptiveCrossing {
     return forms;
   }
 
-  /// Solves face (axes, side) of `leaf`; reads only, so faces are solved in parallel (a
-  /// FaceSolver per call). For m >= 2 the face is first solved by evaluation of the programs
-  /// (FaceSolver::solveByEvaluation); only a face that decides nothing so is solved on the
-  /// Bernstein slices of the leaf's patches, which `patches()` returns (restrictLeaf, on first
-  /// use) with the margins `margins`.
-  /// solveFace's working storage, per thread (threadScratch): a face solved allocates only
-  /// for the roots it finds.
+  /// solveFace's working storage, per thread (threadScratch): a face solved allocates little
+  /// besides the roots it finds.
   struct FaceWork {
     FaceSolver<S> solver;
     std::vector<Bernstein<S>> face, cut;  ///< the face slices, and the first cut when k = 2
@@ -576,6 +571,11 @@ class AdaptiveCrossing {
     std::vector<std::vector<S>> roots;
   };
 
+  /// Solves face (axes, side) of `leaf`; reads only, so faces are solved in parallel (a
+  /// FaceSolver per thread, reset per call). For m >= 2 the face is first solved by evaluation of
+  /// the programs (FaceSolver::solveByEvaluation); only a face that decides nothing so is solved on
+  /// the Bernstein slices of the leaf's patches, which `patches()` returns (restrictLeaf, on first
+  /// use) with the margins `margins`.
   template <class Patches>
   FaceResult<S> solveFace(std::int32_t leaf, const std::array<int, 2>& axes, int side,
                           Patches&& patches, std::span<const S> margins,
