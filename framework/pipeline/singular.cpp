@@ -428,10 +428,10 @@ std::vector<std::int32_t> Search<S>::findCandidates(SingularSearch& out) {
   const std::size_t count = cells_.size();
   std::vector<std::size_t> firsts;  // the first cell of each new block
   std::vector<const std::vector<Bernstein<S>>*> roots;
-  CellMap<std::size_t> pending;
+  CellSet pending;
   for (std::size_t c = 0; c < count; ++c) {
     const CellKey key = blockKey(cells_.cell(c));
-    if (blocks_.count(key) || !pending.emplace(key, firsts.size()).second) continue;
+    if (blocks_.count(key) || !pending.insert(key).second) continue;
     firsts.push_back(c);
     roots.push_back(&rootFor(cells_.cell(c)));
   }
