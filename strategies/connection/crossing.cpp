@@ -713,34 +713,62 @@ class AdaptiveCrossing {
     thread_local std::vector<std::int32_t> ci, position;
     ci.assign(tree_.index(c).begin(), tree_.index(c).end());
     position.resize(n_);
+    // The region at c's index moved by d0 along axis a0 and by d1 along a1 (a1 < 0: none).
+    const auto lookup = [&](int a0, int d0, int a1, int d1) {
+      std::copy(ci.begin(), ci.end(), position.begin());
+      position[a0] += d0;
+      if (a1 >= 0) position[a1] += d1;
+      return tree_.find(level, position);
+    };
     // The regions next to c across one face (2 per axis), looked up once: every face choice
     // with that axis meets them, so only the diagonal regions are looked up per choice.
     thread_local std::vector<Occupant> across;
     thread_local std::vector<std::uint8_t> looked;
     across.resize(2 * std::size_t(n_));
     looked.assign(2 * std::size_t(n_), 0);
-    const auto region = [&](std::span<const int> axes, std::span<const int> offset) -> Occupant {
-      int moved = -1, count = 0;
-      for (std::size_t t = 0; t < axes.size(); ++t) {
-        if (offset[t] != 0) moved = int(t), ++count;
-      }
-      if (count == 0) return Occupant{Occ::kLeaf, c, 0};
-      const auto lookup = [&] {
-        std::copy(ci.begin(), ci.end(), position.begin());
-        for (std::size_t t = 0; t < axes.size(); ++t) position[axes[t]] += offset[t];
-        return tree_.find(level, position);
-      };
-      if (count > 1) return lookup();
-      const std::size_t slot = 2 * std::size_t(axes[moved]) + (offset[moved] > 0 ? 1 : 0);
-      if (!looked[slot]) across[slot] = lookup(), looked[slot] = 1;
+    const auto acrossOf = [&](int axis, int d) -> const Occupant& {
+      const std::size_t slot = 2 * std::size_t(axis) + (d > 0 ? 1 : 0);
+      if (!looked[slot]) across[slot] = lookup(axis, d, -1, 0), looked[slot] = 1;
       return across[slot];
     };
-    std::array<Occupant, 4> around;
+    // A face of c is not c's when a region around it is finer (the face is not minimal: its
+    // parts belong to the finer leaves) or a leaf of c's level before c (the face belongs to
+    // the first leaf of its own level).
+    const auto rulesOut = [&](const Occupant& o) {
+      return o.kind == Occ::kFiner ||
+             (o.kind == Occ::kLeaf && tree_.level(o.leaf) == level && o.leaf < c);
+    };
+    const Occupant self{Occ::kLeaf, c, 0};
     out.clear();
     out.reserve(fixedAxes_.size() << k_);  // every face kind at most once: one allocation
+    std::array<Occupant, 4> around;
     for (std::size_t a = 0; a < fixedAxes_.size(); ++a) {
+      const auto& axes = fixedAxes_[a];
       for (int side = 0; side < (1 << k_); ++side) {
-        if (!ownedFace(level, a, side, around, c, region)) continue;
+        // The face's lower corner is c's moved by `side`; around it, on each fixed axis t, lie
+        // c's side and the side across (offset d_t: -1 at the lower face, +1 at the upper).
+        const int s0 = side & 1, d0 = s0 ? 1 : -1;
+        const Occupant& o0 = acrossOf(axes[0], d0);
+        if (k_ == 1) {
+          if (rulesOut(o0)) continue;
+          around[0] = s0 ? self : o0;
+          around[1] = s0 ? o0 : self;
+        } else {
+          // The regions across one face first (looked up once), so that a face that is not
+          // c's is rejected before its diagonal region is looked up.
+          const int s1 = (side >> 1) & 1, d1 = s1 ? 1 : -1;
+          const Occupant& o1 = acrossOf(axes[1], d1);
+          if (rulesOut(o1) || rulesOut(o0)) continue;
+          const Occupant diagonal = lookup(axes[0], d0, axes[1], d1);
+          if (rulesOut(diagonal)) continue;
+          // In cyclic order: (-a,-b), (+a,-b), (+a,+b), (-a,+b) around the lower corner; the
+          // quadrant on c's side along both axes is c.
+          static constexpr int kBits[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+          for (int q = 0; q < 4; ++q) {
+            const bool moved0 = kBits[q][0] == s0, moved1 = kBits[q][1] == s1;
+            around[q] = moved0 ? (moved1 ? diagonal : o0) : (moved1 ? o1 : self);
+          }
+        }
         out.push_back({static_cast<std::uint8_t>(a), static_cast<std::uint8_t>(side), around});
       }
     }
@@ -770,36 +798,6 @@ class AdaptiveCrossing {
   std::uint64_t faceKey(std::int32_t c, std::size_t a, int side) const {
     const auto faceTypes = static_cast<std::uint64_t>(fixedAxes_.size()) << k_;
     return static_cast<std::uint64_t>(c) * faceTypes + (a << k_) + std::uint64_t(side);
-  }
-
-  /// Whether face (a, side) of leaf c (at `level`) is a minimal m-face that c owns; the
-  /// regions around it into `around`, each from region(axes, offset), the region at c's index
-  /// moved by offset[t] along axes[t].
-  template <class Region>
-  bool ownedFace(int level, std::size_t a, int side, std::array<Occupant, 4>& around,
-                 std::int32_t c, Region&& region) const {
-    const auto& axes = fixedAxes_[a];
-    // The regions around the face in cyclic order (k = 2): (-a,-b), (+a,-b), (+a,+b),
-    // (-a,+b), relative to the face's lower corner, which is c's corner moved by `side`. A
-    // finer region means the face is not minimal: its parts belong to the finer leaves. The
-    // face belongs to the first leaf of its own level. The regions next to c across one face
-    // (which `region` has looked up for the other faces already) come first, so that a face
-    // that is not minimal or not c's is rejected before its diagonal region is looked up.
-    std::array<int, 2> offset{0, 0};
-    for (int pass = 0; pass < 2; ++pass) {
-      for (int q = 0; q < (1 << k_); ++q) {
-        const int bits = k_ == 1 ? q : (q == 0 ? 0 : q == 1 ? 1 : q == 2 ? 3 : 2);
-        for (int t = 0; t < k_; ++t) offset[t] = ((side >> t) & 1) + ((bits >> t) & 1) - 1;
-        const bool diagonal = k_ == 2 && offset[0] != 0 && offset[1] != 0;
-        if (diagonal != (pass == 1)) continue;
-        around[q] = region(std::span<const int>(axes.data(), k_), std::span<const int>(offset));
-        if (around[q].kind == Occ::kFiner) return false;
-        if (around[q].kind == Occ::kLeaf && tree_.level(around[q].leaf) == level &&
-            around[q].leaf < c)
-          return false;
-      }
-    }
-    return true;
   }
 
   /// restrictTo(c), or its answer from prefetchFaces (then patches_ are not c's and `ready`
