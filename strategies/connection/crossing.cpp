@@ -812,16 +812,14 @@ class AdaptiveCrossing {
     return restrictTo(c);
   }
 
-  /// The solution of face (a, side) of leaf c: prefetchFaces's, or solved now. The prefetched
-  /// faces are in the order crossFaces asks for them, from `next` on (no search per face).
+  /// The solution of face (a, side) of leaf c: prefetchFaces's, or solved now. prefetchLeaf
+  /// solved the faces crossFaces asks for, in its order (both skip the faces kept already, and
+  /// only c's own walk keeps faces of c), so they are taken from `next` on, with no search.
   FaceResult<S> faceResult(std::int32_t c, std::size_t a, int side, std::uint64_t key, bool& ready,
                            std::size_t& next) {
     if (LeafFaces* known = prefetchedOf(c)) {
       auto& faces = known->faces;
       if (next < faces.size() && faces[next].first == key) return std::move(faces[next++].second);
-      for (auto& [at, result] : faces) {
-        if (at == key) return std::move(result);
-      }
     }
     const RootForms& rf = rootForms(tree_.index(c), tree_.level(c));
     const auto patches = [&]() -> const std::vector<Bernstein<S>>& {
@@ -949,6 +947,11 @@ class AdaptiveCrossing {
     }
   }
 
+  /// levelsMet's working storage (threadScratch).
+  struct CornerWork {
+    std::vector<S> corner, zero;
+  };
+
   /// Whether every F_i - c_i provably takes both signs on the leaf `box` of `model`: its sign
   /// at the centre (the model's value), and the opposite one at the corner where the model's
   /// gradient points away from it (a midpoint-radius run at that corner). Then no Bernstein form
@@ -958,7 +961,9 @@ class AdaptiveCrossing {
     using std::abs;
     if (!model.valid) return false;
     std::vector<MidRadEvaluator<S>>& evaluators = threadEvaluators(in_.system);
-    thread_local std::vector<S> corner, zero;
+    std::optional<CornerWork> fresh;
+    CornerWork& w = threadScratch<S, CornerWork>(fresh);
+    std::vector<S>&corner = w.corner, &zero = w.zero;
     corner.resize(n_);
     zero.assign(n_, S(0));
     const S eps = 2 * ScalarTraits<S>::epsilon();

@@ -774,7 +774,8 @@ class FaceSolver {
   /// Krawczyk contractions of one box before it is halved.
   static constexpr int kContractions = 8;
   std::vector<S> faceWidth_;  ///< solveByEvaluation's face widths, to pick the axis to halve
-  // Working storage kept across solves (each used by one function that calls no other user).
+  // Working storage kept across solves; no function holds one of these while it calls another
+  // function that uses the same one.
   std::vector<std::vector<Bernstein<S>>> halves_;  ///< recurse's halves, two per depth
   std::vector<FaceEnds> halfEnds_;                 ///< and their ends
   std::vector<S> root_;                            ///< recurse's Newton root
