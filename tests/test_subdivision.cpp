@@ -754,3 +754,164 @@ TEMPLATE_TEST_CASE("linearized bounding decides boxes around 2-flats exactly", "
   CHECK(kept >= 100);
   CHECK(discarded >= 100);
 }
+
+TEMPLATE_TEST_CASE("linearized bounding discards boxes off the flat of a 2-sphere's hyperplanes",
+                   "[subdivision]", NDC_SCALARS) {
+  // Generated rotated 2-spheres in R^5..R^8, as `ndcontour experiment`'s rotated-sphere
+  // generator writes them: y = R (x - q) with R a random orthogonal matrix, the sphere
+  // y_0^2 + y_1^2 + y_2^2 = 1 and the n - 3 hyperplanes y_i = 0, i >= 3, which alone meet a box
+  // iff their 3-flat x = q + U t (U the first three columns of R^T) does: a polytope in t,
+  // nonempty iff one of its candidate vertices (three of the 2 n planes U_j t = bounds)
+  // satisfies all 2 n constraints. Near the sphere, a box the flat misses by 5% of its width
+  // must be discarded, although the sphere's remainder over the box is large and every row of
+  // the orthonormalised system mixes it in (the multiplier test: before it, 70% of such boxes
+  // were kept); a box around a point of the sphere must never be.
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  std::mt19937 rng(41);
+  std::normal_distribution<double> gauss;
+  std::uniform_real_distribution<double> unit(0, 1);
+  int kept = 0, discarded = 0;
+  for (int n = 5; n <= 8; ++n) {
+    for (int sphere = 0; sphere < 4; ++sphere) {
+      Eigen::MatrixXd g(n, n);
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) g(i, j) = gauss(rng);
+      const Eigen::MatrixXd r = g.householderQr().householderQ();  // rows: the axes y_i
+      Eigen::VectorXd q(n);
+      for (int j = 0; j < n; ++j) q(j) = 0.1 * (2 * unit(rng) - 1);
+      const auto axis = [&](int i) {  // y_i = R_i . x - R_i . q as text
+        std::ostringstream e;
+        e.precision(17);
+        e << "(";
+        for (int j = 0; j < n; ++j) e << (j ? " + " : "") << "(" << r(i, j) << ")*x" << j;
+        e << " + (" << -r.row(i).dot(q) << "))";
+        return e.str();
+      };
+      std::vector<std::string> equations{axis(0) + "^2 + " + axis(1) + "^2 + " + axis(2) +
+                                         "^2 - 1"};
+      for (int i = 3; i < n; ++i) equations.push_back(axis(i));
+      const Eigen::MatrixXd u = r.topRows(3).transpose();              // the flat's directions
+      const Eigen::MatrixXd normal = r.bottomRows(n - 3).transpose();  // its normals
+      const Problem problem = ndc::test::makeProblem(n, equations, 2);
+      const ndc::LinearizedBounding<S> bounding(problem, problem.domainAs<S>());
+      const auto toBox = [&](const std::vector<double>& lo, double w) {
+        ndc::Box<S> box{std::vector<S>(n), std::vector<S>(n)};
+        for (int j = 0; j < n; ++j) box.lo[j] = S(lo[j]), box.hi[j] = S(lo[j] + w);
+        return box;
+      };
+      const auto spherePoint = [&] {
+        Eigen::Vector3d t(gauss(rng), gauss(rng), gauss(rng));
+        return Eigen::VectorXd(q + u * t.normalized());
+      };
+      for (int trial = 0; trial < 300; ++trial) {
+        // A point of the sphere moved along a random normal of the flat by 0.05 to 1 width,
+        // at a random place in a box of width 2.6 / 2^4 .. 2.6 / 2^6 (the per-cell depths).
+        const double w = 2.6 * std::ldexp(1.0, -4 - static_cast<int>(rng() % 3));
+        Eigen::VectorXd v(n - 3);
+        for (int i = 0; i < n - 3; ++i) v(i) = gauss(rng);
+        const Eigen::VectorXd p =
+            spherePoint() + normal * v.normalized() * (w * (0.05 + 0.95 * unit(rng)));
+        std::vector<double> lo(n);
+        for (int j = 0; j < n; ++j) lo[j] = p(j) - unit(rng) * w;
+        // Whether the flat meets the box with every face moved out by `slack`.
+        const auto meets = [&](double slack) {
+          std::vector<Eigen::Vector3d> dir;
+          std::vector<double> bound;
+          for (int j = 0; j < n; ++j) {
+            const Eigen::Vector3d row = u.row(j).transpose();
+            dir.push_back(row), bound.push_back(lo[j] + w - q(j) + slack);
+            dir.push_back(-row), bound.push_back(q(j) - lo[j] + slack);
+          }
+          for (std::size_t h0 = 0; h0 < dir.size(); ++h0)
+            for (std::size_t h1 = h0 + 1; h1 < dir.size(); ++h1)
+              for (std::size_t h2 = h1 + 1; h2 < dir.size(); ++h2) {
+                Eigen::Matrix3d m;
+                m << dir[h0].transpose(), dir[h1].transpose(), dir[h2].transpose();
+                if (std::abs(m.determinant()) < 1e-12) continue;
+                const Eigen::Vector3d t =
+                    m.inverse() * Eigen::Vector3d(bound[h0], bound[h1], bound[h2]);
+                bool inside = true;
+                for (std::size_t h = 0; h < dir.size() && inside; ++h)
+                  inside = dir[h].dot(t) <= bound[h] + 1e-12;
+                if (inside) return true;
+              }
+          return false;
+        };
+        // Only boxes the flat misses by 5% to 30% of their width: the far ones any test
+        // discards.
+        if (meets(0.05 * w) || !meets(0.3 * w)) continue;
+        INFO("n = " << n << ", sphere " << sphere << ", trial " << trial);
+        CHECK(bounding.linearizationExcludes(toBox(lo, w)));
+        ++discarded;
+      }
+      for (int trial = 0; trial < 40; ++trial) {
+        // Boxes of widths 2^-2 .. 2^-9 around a point of the sphere, anywhere inside.
+        const Eigen::VectorXd p = spherePoint();
+        const double w = std::ldexp(1.0, -2 - static_cast<int>(rng() % 8));
+        std::vector<double> lo(n);
+        for (int j = 0; j < n; ++j) lo[j] = p(j) - unit(rng) * w;
+        INFO("n = " << n << ", sphere " << sphere << ", point box " << trial);
+        CHECK_FALSE(bounding.linearizationExcludes(toBox(lo, w)));
+        ++kept;
+      }
+    }
+  }
+  CHECK(kept >= 600);
+  CHECK(discarded >= 150);
+}
+
+TEMPLATE_TEST_CASE("a quadratic without a patch is enclosed by its Taylor form", "[subdivision]",
+                   NDC_SCALARS) {
+  // The unit sphere F = |x - q|^2 - 1 in R^7 and R^8 (3^n coefficients: no patch, enclosed
+  // from its linearisation). Its Taylor form over a box c +- h is exact:
+  // F(c + d) = F(c) + grad F(c) . d + |d|^2, so F(X) lies in F(c) +- (|grad F(c)| . h + |h|^2),
+  // where the mean-value form with the gradient over the box gives twice the last term. Boxes
+  // near the sphere: those 1% outside the Taylor enclosure must be discarded, and some of them
+  // lie within the mean-value form's.
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  std::mt19937 rng(43);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int discarded = 0, onlyByTaylor = 0;
+  for (int n : {7, 8}) {
+    std::vector<double> q(n);
+    for (double& v : q) v = std::round(64 * (0.2 * unit(rng) - 0.1)) / 64;
+    std::string sphere;
+    for (int j = 0; j < n; ++j) {
+      std::ostringstream e;
+      e.precision(17);
+      e << (j ? " + " : "") << "(x" << j << " - (" << q[j] << "))^2";
+      sphere += e.str();
+    }
+    const Problem problem = ndc::test::makeProblem(n, {sphere + " - 1"}, 2);
+    REQUIRE_FALSE(ndc::LinearizedBounding<double>::hasPatch(problem.equations[0]));
+    const ndc::LinearizedBounding<S> bounding(problem, problem.domainAs<S>());
+    for (int trial = 0; trial < 1000; ++trial) {
+      // Dyadic boxes of width 2^-1 .. 2^-4 near the sphere (the wide ones are those where the
+      // remainder matters).
+      const double w = std::ldexp(1.0, -1 - static_cast<int>(rng() % 4));
+      std::vector<double> c(n);
+      double norm = 0;
+      for (int j = 0; j < n; ++j) c[j] = unit(rng) - 0.5, norm += c[j] * c[j];
+      const double radius = 1 + (unit(rng) - 0.5) * 6 * w;
+      double value = -1, reach = 0, square = 0;
+      for (int j = 0; j < n; ++j) {
+        c[j] = q[j] + std::round(c[j] / std::sqrt(norm) * radius / w) * w;
+        value += (c[j] - q[j]) * (c[j] - q[j]);
+        reach += std::abs(2 * (c[j] - q[j])) * w / 2;
+        square += w * w / 4;
+      }
+      if (std::abs(value) <= 1.01 * (reach + square)) continue;
+      ndc::Box<S> box{std::vector<S>(n), std::vector<S>(n)};
+      for (int j = 0; j < n; ++j) box.lo[j] = S(c[j] - w / 2), box.hi[j] = S(c[j] + w / 2);
+      INFO("n = " << n << ", trial " << trial << ", F(c) = " << value << ", Taylor reach "
+                  << reach + square);
+      CHECK(bounding.meanValueExcludes(box));
+      ++discarded;
+      onlyByTaylor += std::abs(value) < 0.99 * (reach + 2 * square);
+    }
+  }
+  CHECK(discarded >= 100);
+  CHECK(onlyByTaylor >= 20);
+}

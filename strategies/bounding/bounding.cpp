@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <span>
 #include <stdexcept>
@@ -199,6 +200,11 @@ LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& 
   // 7c's polygons: 4 corners, at most one vertex more per clip, 2 n clips.
   polygon_.reserve(2 * (4 + 2 * std::size_t(n)));
   clipped_.reserve(2 * (4 + 2 * std::size_t(n)));
+  gram_.resize(m * m);
+  y_.resize(m);
+  yWeight_.resize(m);
+  z_.resize(n);
+  zWeight_.resize(n);
   // Affine equations have a constant gradient: enclose it once, by the outward-rounded interval
   // gradient over the domain (the constant up to the rounding of the literals).
   affine_.assign(m, 0);
@@ -207,10 +213,13 @@ LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& 
   std::vector<Interval<S>> box(n), gradient(n);
   for (std::size_t j = 0; j < n; ++j) box[j] = Interval<S>(domain.lo[j], domain.hi[j]);
   evaluated_.assign(m, 0);
+  quadratic_.assign(m, 0);
   for (std::size_t i = 0; i < m; ++i) {
+    const Tape& tape = problem.equations[i].tape();
     evaluated_[i] = !hasPatch(problem.equations[i]);
     anyEvaluated_ = anyEvaluated_ || evaluated_[i];
-    if (problem.equations[i].tape().totalDegree(2) > 1) continue;
+    quadratic_[i] = tape.leaves().empty() && tape.totalDegree(3) == 2;
+    if (tape.totalDegree(2) > 1) continue;
     affine_[i] = 1;
     problem.equations[i].evaluate<S>(std::span<const Interval<S>>(box),
                                      std::span<Interval<S>>(gradient));
@@ -276,7 +285,8 @@ bool LinearizedBounding<S>::linearisedSystemExcludes(const S& hh) const {
   if (ballTestExcludes(migSq, hh)) return true;  // 6
   kernelBounds();                                // 7
   if (kernelPropagationExcludes()) return true;
-  return n_ - m_ == 2 && kernelPolygonExcludes();
+  if (n_ - m_ == 2 && kernelPolygonExcludes()) return true;
+  return multiplierExcludes();  // 8
 }
 
 template <class S>
@@ -296,12 +306,13 @@ template <class S>
 bool LinearizedBounding<S>::linearise() const {
   // 2. The linearised system J_c d = -g, g in G = mu_i +- rho_i: F(c) enclosed at the point,
   // J_c = mid J(X), r_i = sum_j mag(J_ij(X) - J_c,ij) h_j = sum_j rad J_ij(X) h_j (mean value
-  // theorem).
+  // theorem); for a quadratic J_c = mid grad F(c) and the Taylor remainder (class comment).
   using std::isfinite;
   const int n = n_;
   const S up = S(1) + tol_;
   for (int i = 0; i < m_; ++i) {
     S* jac = &jac_[at(i, 0, n)];
+    const MidRadEvaluator<S>& evaluator = evaluators_[i];
     S r = 0;
     if (affine_[i]) {
       for (int j = 0; j < n; ++j) {
@@ -309,15 +320,23 @@ bool LinearizedBounding<S>::linearise() const {
         r += affineRad_[at(i, j, n)] * h_[j];
       }
     } else {
-      if (!evaluators_[i].run(c_, h_, true)) return false;
-      for (int j = 0; j < n; ++j) {
-        jac[j] = evaluators_[i].mid(j + 1);
-        r += evaluators_[i].rad(j + 1) * h_[j];
+      if (!evaluator.run(c_, h_, true)) return false;
+      for (int j = 0; j < n; ++j) r += evaluator.rad(j + 1) * h_[j];
+      if (quadratic_[i]) {
+        // d^T H d / 2 from the gradient's radius over X, the gradient itself at c.
+        r /= 2;
+        if (!evaluator.run(c_, zero_, true)) return false;
+        for (int j = 0; j < n; ++j) {
+          jac[j] = evaluator.mid(j + 1);
+          r += evaluator.rad(j + 1) * h_[j];
+        }
+      } else {
+        for (int j = 0; j < n; ++j) jac[j] = evaluator.mid(j + 1);
       }
     }
-    if (!evaluators_[i].run(c_, zero_, false)) return false;
-    mu_[i] = evaluators_[i].mid(0);
-    rho_[i] = (evaluators_[i].rad(0) + r * up) * up;
+    if (!quadratic_[i] && !evaluator.run(c_, zero_, false)) return false;
+    mu_[i] = evaluator.mid(0);
+    rho_[i] = (evaluator.rad(0) + r * up) * up;
     if (!isfinite(rho_[i])) return false;
   }
   return true;
@@ -597,6 +616,104 @@ bool LinearizedBounding<S>::kernelPolygonExcludes() const {
     if (!clip(u0, u1, a_[j] + b_[j] + slack) || !clip(-u0, -u1, b_[j] - a_[j] + slack)) return true;
   }
   return false;
+}
+
+template <class S>
+bool LinearizedBounding<S>::multiplierExcludes() const {
+  // 8. Reweighted least squares for the multipliers: each step minimises
+  // y^T W y = sum_i rho_i y_i^2 / |y'_i| + sum_j h_j (J_c^T y)_j^2 / |(J_c^T y')_j| over
+  // y . mu = 1 (y' the previous step's y), whose minimiser is W^{-1} mu up to its scale; the
+  // weights make y^T W y equal the test's right side at y = y'.
+  using std::abs;
+  const int n = n_, m = m_;
+  std::fill(yWeight_.begin(), yWeight_.end(), S(1));
+  std::fill(zWeight_.begin(), zWeight_.end(), S(1));
+  S best = std::numeric_limits<double>::infinity();
+  for (int step = 0; step < kMultiplierIterations; ++step) {
+    // W = diag(rho / |y'|) + J_c diag(h / |z'|) J_c^T, then y = W^{-1} mu by Cholesky.
+    for (int i = 0; i < m; ++i)
+      for (int t = 0; t <= i; ++t) {
+        S s = i == t ? rho_[i] / yWeight_[i] : S(0);
+        for (int j = 0; j < n; ++j)
+          s += jac_[at(i, j, n)] * jac_[at(t, j, n)] * h_[j] / zWeight_[j];
+        gram_[at(i, t, m)] = s;
+      }
+    if (!solveGram()) return false;
+    S ratio;
+    if (multipliersExclude(ratio)) return true;
+    // Stop when a step gains under 1%: the least-squares steps have converged.
+    if (!(ratio < best * S(0.99))) return false;
+    best = ratio;
+    S yMax = 0, zMax = 0;
+    for (int i = 0; i < m; ++i) yMax = std::max(yMax, S(abs(y_[i])));
+    for (int j = 0; j < n; ++j) zMax = std::max(zMax, S(abs(z_[j])));
+    const S floor = S(1e-8);
+    for (int i = 0; i < m; ++i) yWeight_[i] = std::max(S(abs(y_[i])), yMax * floor);
+    for (int j = 0; j < n; ++j) zWeight_[j] = std::max(S(abs(z_[j])), zMax * floor);
+    if (!(yMax > 0) || !(zMax > 0)) return false;
+  }
+  return false;
+}
+
+template <class S>
+bool LinearizedBounding<S>::solveGram() const {
+  // y_ = W^{-1} mu_ for the symmetric positive definite W in the lower triangle of gram_
+  // (Cholesky in place); false when a pivot is not positive.
+  using std::sqrt;
+  const int m = m_;
+  for (int i = 0; i < m; ++i) {
+    for (int t = 0; t <= i; ++t) {
+      S s = gram_[at(i, t, m)];
+      for (int l = 0; l < t; ++l) s -= gram_[at(i, l, m)] * gram_[at(t, l, m)];
+      if (i == t) {
+        if (!(s > 0)) return false;
+        gram_[at(i, i, m)] = sqrt(s);
+      } else {
+        gram_[at(i, t, m)] = s / gram_[at(t, t, m)];
+      }
+    }
+  }
+  for (int i = 0; i < m; ++i) {  // L v = mu
+    S s = mu_[i];
+    for (int l = 0; l < i; ++l) s -= gram_[at(i, l, m)] * y_[l];
+    y_[i] = s / gram_[at(i, i, m)];
+  }
+  for (int i = m - 1; i >= 0; --i) {  // L^T y = v
+    S s = y_[i];
+    for (int l = i + 1; l < m; ++l) s -= gram_[at(l, i, m)] * y_[l];
+    y_[i] = s / gram_[at(i, i, m)];
+  }
+  return true;
+}
+
+template <class S>
+bool LinearizedBounding<S>::multipliersExclude(S& ratio) const {
+  // The check of step 8 for the computed y_, with the error bounds of the row test (5): a
+  // lower bound of |y . g| over g in G against an upper bound of sum_j |(J_c^T y)_j| h_j.
+  using std::abs;
+  const int n = n_, m = m_;
+  const S& tol = tol_;
+  const S up = S(1) + tol;
+  S v = 0, va = 0, vr = 0;  // y . mu, |y| . |mu|, |y| . rho
+  for (int i = 0; i < m; ++i) {
+    v += y_[i] * mu_[i];
+    va += abs(y_[i]) * abs(mu_[i]);
+    vr += abs(y_[i]) * rho_[i];
+  }
+  S reach = 0;
+  for (int j = 0; j < n; ++j) {
+    S z = 0, za = 0;
+    for (int i = 0; i < m; ++i) {
+      z += y_[i] * jac_[at(i, j, n)];
+      za += abs(y_[i]) * abs(jac_[at(i, j, n)]);
+    }
+    z_[j] = z;
+    reach += (abs(z) + tol * za) * h_[j];
+  }
+  const S absV = abs(v);
+  const S mig = absV - tol * va - vr - tol * (absV + va + vr);
+  ratio = absV > 0 ? S((vr + reach) / absV) : S(std::numeric_limits<double>::infinity());
+  return mig > reach * up;
 }
 
 // --- Factory -------------------------------------------------------------------------------------
