@@ -292,14 +292,17 @@ TEMPLATE_TEST_CASE("crossing: a leaf's affine model never excludes a face throug
         ndc::FacePreconditioner<S> pre;
         ndc::buildFacePreconditioner(model, std::span<const int>(axes), pre);
         CHECK_FALSE(ndc::faceKrawczykExcludes(model, pre, box, std::span<const int>(axes), side));
+        CHECK_FALSE(ndc::faceMultipliersExclude(model, box, std::span<const int>(axes), side, 8));
         ++faces;
       }
       // A leaf far outside the sphere: every face excluded.
       ndc::Box<S> far{std::vector<S>(n, S(3)), std::vector<S>(n, S(3.25))};
       ndc::buildLeafModel(evaluators, far, std::span<const S>(level), model);
       const std::array<int, 2> axes{0, 1};
-      for (int side = 0; side < 4; ++side)
+      for (int side = 0; side < 4; ++side) {
         CHECK(ndc::faceExcluded(model, far, std::span<const int>(axes), side));
+        CHECK(ndc::faceMultipliersExclude(model, far, std::span<const int>(axes), side, 8));
+      }
     }
   }
   CHECK(faces == 6 * 6 * 40);

@@ -61,6 +61,7 @@ MidRadEvaluator<S>::MidRadEvaluator(std::shared_ptr<const Tape> tape)
   leafMid_.assign(tape_->leaves().size() * stride, S(0));
   leafRad_ = leafMid_;
   leafDone_.assign(tape_->leaves().size(), 0);
+  gradientAffine_ = tape_->leaves().empty() && tape_->totalDegree(3) <= 2;
 }
 
 template <class S>

@@ -34,6 +34,11 @@ class MidRadEvaluator {
   const S& mid(int q) const { return stackMid_[static_cast<std::size_t>(q)]; }
   const S& rad(int q) const { return stackRad_[static_cast<std::size_t>(q)]; }
 
+  /// True when the program is a polynomial of total degree at most 2 without piecewise leaves,
+  /// so that its gradient is affine: F(c + d) = F(c) + grad F(c) . d + d^T H d / 2 exactly, and
+  /// a gradient enclosed over c +- h has radius at least sum_l |H_jl| h_l along each axis j.
+  bool gradientAffine() const { return gradientAffine_; }
+
  private:
   /// Pushes a constant, variable or leaf into slot (m, r).
   void pushOperand(const TapeOp& op, S* m, S* r) const;
@@ -48,6 +53,7 @@ class MidRadEvaluator {
   std::shared_ptr<const Tape> tape_;
   std::vector<S> constMid_, constRad_;  // per constant
   S u_, up_;  // unit of the arithmetic (>= 2 x unit round-off) and 1 + 8 u
+  bool gradientAffine_ = false;
   // Per run: the stride (n + 1 or 1), the centre and radii, the stack ((n + 1) per slot) and
   // the enclosures of each distinct leaf ((n + 1) per leaf).
   mutable std::size_t stride_ = 1;

@@ -200,11 +200,6 @@ LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& 
   // 7c's polygons: 4 corners, at most one vertex more per clip, 2 n clips.
   polygon_.reserve(2 * (4 + 2 * std::size_t(n)));
   clipped_.reserve(2 * (4 + 2 * std::size_t(n)));
-  gram_.resize(m * m);
-  y_.resize(m);
-  yWeight_.resize(m);
-  z_.resize(n);
-  zWeight_.resize(n);
   // Affine equations have a constant gradient: enclose it once, by the outward-rounded interval
   // gradient over the domain (the constant up to the rounding of the literals).
   affine_.assign(m, 0);
@@ -218,8 +213,10 @@ LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& 
     const Tape& tape = problem.equations[i].tape();
     evaluated_[i] = !hasPatch(problem.equations[i]);
     anyEvaluated_ = anyEvaluated_ || evaluated_[i];
-    quadratic_[i] = tape.leaves().empty() && tape.totalDegree(3) == 2;
-    if (tape.totalDegree(2) > 1) continue;
+    if (tape.totalDegree(2) > 1) {
+      quadratic_[i] = evaluators_[i].gradientAffine();
+      continue;
+    }
     affine_[i] = 1;
     problem.equations[i].evaluate<S>(std::span<const Interval<S>>(box),
                                      std::span<Interval<S>>(gradient));
@@ -620,100 +617,9 @@ bool LinearizedBounding<S>::kernelPolygonExcludes() const {
 
 template <class S>
 bool LinearizedBounding<S>::multiplierExcludes() const {
-  // 8. Reweighted least squares for the multipliers: each step minimises
-  // y^T W y = sum_i rho_i y_i^2 / |y'_i| + sum_j h_j (J_c^T y)_j^2 / |(J_c^T y')_j| over
-  // y . mu = 1 (y' the previous step's y), whose minimiser is W^{-1} mu up to its scale; the
-  // weights make y^T W y equal the test's right side at y = y'.
-  using std::abs;
-  const int n = n_, m = m_;
-  std::fill(yWeight_.begin(), yWeight_.end(), S(1));
-  std::fill(zWeight_.begin(), zWeight_.end(), S(1));
-  S best = std::numeric_limits<double>::infinity();
-  for (int step = 0; step < kMultiplierIterations; ++step) {
-    // W = diag(rho / |y'|) + J_c diag(h / |z'|) J_c^T, then y = W^{-1} mu by Cholesky.
-    for (int i = 0; i < m; ++i)
-      for (int t = 0; t <= i; ++t) {
-        S s = i == t ? rho_[i] / yWeight_[i] : S(0);
-        for (int j = 0; j < n; ++j)
-          s += jac_[at(i, j, n)] * jac_[at(t, j, n)] * h_[j] / zWeight_[j];
-        gram_[at(i, t, m)] = s;
-      }
-    if (!solveGram()) return false;
-    S ratio;
-    if (multipliersExclude(ratio)) return true;
-    // Stop when a step gains under 1%: the least-squares steps have converged.
-    if (!(ratio < best * S(0.99))) return false;
-    best = ratio;
-    S yMax = 0, zMax = 0;
-    for (int i = 0; i < m; ++i) yMax = std::max(yMax, S(abs(y_[i])));
-    for (int j = 0; j < n; ++j) zMax = std::max(zMax, S(abs(z_[j])));
-    const S floor = S(1e-8);
-    for (int i = 0; i < m; ++i) yWeight_[i] = std::max(S(abs(y_[i])), yMax * floor);
-    for (int j = 0; j < n; ++j) zWeight_[j] = std::max(S(abs(z_[j])), zMax * floor);
-    if (!(yMax > 0) || !(zMax > 0)) return false;
-  }
-  return false;
-}
-
-template <class S>
-bool LinearizedBounding<S>::solveGram() const {
-  // y_ = W^{-1} mu_ for the symmetric positive definite W in the lower triangle of gram_
-  // (Cholesky in place); false when a pivot is not positive.
-  using std::sqrt;
-  const int m = m_;
-  for (int i = 0; i < m; ++i) {
-    for (int t = 0; t <= i; ++t) {
-      S s = gram_[at(i, t, m)];
-      for (int l = 0; l < t; ++l) s -= gram_[at(i, l, m)] * gram_[at(t, l, m)];
-      if (i == t) {
-        if (!(s > 0)) return false;
-        gram_[at(i, i, m)] = sqrt(s);
-      } else {
-        gram_[at(i, t, m)] = s / gram_[at(t, t, m)];
-      }
-    }
-  }
-  for (int i = 0; i < m; ++i) {  // L v = mu
-    S s = mu_[i];
-    for (int l = 0; l < i; ++l) s -= gram_[at(i, l, m)] * y_[l];
-    y_[i] = s / gram_[at(i, i, m)];
-  }
-  for (int i = m - 1; i >= 0; --i) {  // L^T y = v
-    S s = y_[i];
-    for (int l = i + 1; l < m; ++l) s -= gram_[at(l, i, m)] * y_[l];
-    y_[i] = s / gram_[at(i, i, m)];
-  }
-  return true;
-}
-
-template <class S>
-bool LinearizedBounding<S>::multipliersExclude(S& ratio) const {
-  // The check of step 8 for the computed y_, with the error bounds of the row test (5): a
-  // lower bound of |y . g| over g in G against an upper bound of sum_j |(J_c^T y)_j| h_j.
-  using std::abs;
-  const int n = n_, m = m_;
-  const S& tol = tol_;
-  const S up = S(1) + tol;
-  S v = 0, va = 0, vr = 0;  // y . mu, |y| . |mu|, |y| . rho
-  for (int i = 0; i < m; ++i) {
-    v += y_[i] * mu_[i];
-    va += abs(y_[i]) * abs(mu_[i]);
-    vr += abs(y_[i]) * rho_[i];
-  }
-  S reach = 0;
-  for (int j = 0; j < n; ++j) {
-    S z = 0, za = 0;
-    for (int i = 0; i < m; ++i) {
-      z += y_[i] * jac_[at(i, j, n)];
-      za += abs(y_[i]) * abs(jac_[at(i, j, n)]);
-    }
-    z_[j] = z;
-    reach += (abs(z) + tol * za) * h_[j];
-  }
-  const S absV = abs(v);
-  const S mig = absV - tol * va - vr - tol * (absV + va + vr);
-  ratio = absV > 0 ? S((vr + reach) / absV) : S(std::numeric_limits<double>::infinity());
-  return mig > reach * up;
+  // 8. The multiplier test on the linearised system (framework/core/multipliers.hpp).
+  return multipliers_.excludes(m_, n_, jac_.data(), mu_.data(), rho_.data(), h_.data(), tol_,
+                               kMultiplierIterations);
 }
 
 // --- Factory -------------------------------------------------------------------------------------

@@ -14,6 +14,7 @@
 #include "framework/core/expression.hpp"
 #include "framework/core/interval.hpp"
 #include "framework/core/midrad.hpp"
+#include "framework/core/multipliers.hpp"
 #include "framework/core/problem.hpp"
 #include "framework/core/registry.hpp"
 #include "framework/core/scalar.hpp"
@@ -132,11 +133,9 @@ class IntervalBounding final {
 ///    above are this test for particular y (the rows of P) or relaxations of it, and each mixes
 ///    the remainders of all equations, so a box that misses the common zeros of the affine
 ///    equations alone (a flat) can pass them when one curved equation has a large remainder.
-///    The y minimising the right side over y . mid G = 1 (a convex piecewise-linear problem) is
-///    approached by iteratively reweighted least squares, y = W^{-1} mid G with
-///    W = diag(rad G_i / |y_i|) + J_c diag(h_j / |(J_c^T y)_j|) J_c^T from the previous y
-///    (W of ones at first), at most kMultiplierIterations times; every y is checked with
-///    bounded rounding, so an inexact y only discards fewer boxes.
+///    The y is found by reweighted least squares (MultiplierTest, at most
+///    kMultiplierIterations steps) and checked with bounded rounding, so an inexact y only
+///    discards fewer boxes.
 /// For an equation of total degree 2 without piecewise leaves the remainder is that of its
 /// Taylor form, F_i(c + d) = F_i(c) + grad F_i(c) . d + d^T H_i d / 2 exactly, so
 /// |F_i(c + d) - F_i(c) - J_c,i d| <= sum_j (rad grad_j F_i(c) + rad J_ij(X) / 2) h_j with
@@ -233,13 +232,6 @@ class LinearizedBounding final {
   bool kernelPolygonExcludes() const;
   /// 8: the multiplier test (reweighted least squares for y); true when some y excludes.
   bool multiplierExcludes() const;
-  /// y_ = W^{-1} mid G for W in the lower triangle of gram_ (Cholesky, in place); false when W
-  /// is not numerically positive definite.
-  bool solveGram() const;
-  /// True when the multipliers y_ prove the linearised system empty (the check of step 8, with
-  /// every rounding bounded); also fills z_ = J_c^T y_ and returns in `ratio` the right side
-  /// over |y . mid G| (excluded iff below 1, up to the margins).
-  bool multipliersExclude(S& ratio) const;
   /// Q1 (row space of J_c) and N = Q2 (its kernel) as n x m and n x k matrices.
   const S& q1(int row, int col) const {
     return q_[static_cast<std::size_t>(col) * static_cast<std::size_t>(n_) +
@@ -264,7 +256,7 @@ class LinearizedBounding final {
   mutable std::vector<S> p_, pj_, pjAbs_, mig_;      // P (m x m), P J_c and |P| |J_c| (m x n)
   mutable std::vector<S> pinv_, a_, b_, tlo_, thi_;  // J^+ (n x m), centre/bound per axis, t box
   mutable std::vector<S> polygon_, clipped_;         // 7c: vertices (t_0, t_1) interleaved
-  mutable std::vector<S> gram_, y_, z_, yWeight_, zWeight_;  // 8: W (m x m), y, J_c^T y, weights
+  mutable MultiplierTest<S> multipliers_;            // 8
 };
 
 static_assert(BoundingStrategy<BernsteinBounding<double>>);

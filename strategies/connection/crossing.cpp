@@ -361,6 +361,10 @@ const char* failureName(Failure f) {
 template <class S>
 class AdaptiveCrossing {
  public:
+  /// Reweighted least-squares steps of a face's multiplier test (faceMultipliersExclude), as in
+  /// the linearized bounding.
+  static constexpr int kFaceMultiplierSteps = 8;
+
   AdaptiveCrossing(const ConnectionInput<S>& in, int maxFaceDepth)
       : in_(in),
         grid_(in.cells.grid),
@@ -608,7 +612,8 @@ class AdaptiveCrossing {
     // The leaf's affine model first: it excludes most faces without an evaluation on them.
     const std::span<const int> fixed(axes.data(), static_cast<std::size_t>(k_));
     if (model && (faceExcluded(*model, box, fixed, side) ||
-                  (pre && faceKrawczykExcludes(*model, *pre, box, fixed, side)))) {
+                  (pre && faceKrawczykExcludes(*model, *pre, box, fixed, side)) ||
+                  faceMultipliersExclude(*model, box, fixed, side, kFaceMultiplierSteps))) {
       return faceOutcome(std::move(r), w.roots, box, w.freeAxes, w.ends);
     }
     FaceSolver<S>& solver = w.solver;

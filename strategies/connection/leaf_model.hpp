@@ -17,6 +17,7 @@
 #include "framework/core/box.hpp"
 #include "framework/core/iteration.hpp"
 #include "framework/core/midrad.hpp"
+#include "framework/core/multipliers.hpp"
 #include "framework/core/parallel.hpp"
 #include "framework/core/scalar.hpp"
 
@@ -35,8 +36,13 @@ void centreAndRadius(const Box<S>& box, std::vector<S>& centre, std::vector<S>& 
   }
 }
 
-/// An affine model of the system F - level over a leaf X with centre c: by the mean value
-/// theorem, F_i(c + d) - level_i lies in value_i + sum_j J_ij(X) d_j for every c + d in X. It
+/// An affine model of the system F - level over a leaf X with centre c: F_i(c + d) - level_i
+/// lies in value_i + sum_j S_ij d_j for every c + d in X, with slopes S_ij in gradMid +- gradRad:
+/// J(X) by the mean value theorem, or, for an equation whose gradient is affine (total degree
+/// 2, MidRadEvaluator::gradientAffine), its Taylor form grad F_i(c) + H_i d / 2, enclosed by the
+/// gradient at c plus half the radius of J(X) (which is at least sum_l |H_jl| radius_l): half
+/// the mean-value form's spread. Slopes, not derivatives, so the model proves only that a face
+/// holds no zero (faceExcluded, faceKrawczykExcludes), never that a zero is unique. It
 /// is built with one evaluation per equation, and then encloses F on each of the leaf's faces
 /// in O(n) operations per equation (faceExcluded), where an evaluation on the face costs a
 /// program run with its gradient: a leaf in R^n has 2 n (n - 1) faces of dimension n - 2 (for a
@@ -45,7 +51,7 @@ template <class S>
 struct LeafModel {
   std::vector<S> centre, radius;      ///< of the leaf; radius rounded up
   std::vector<S> valueMid, valueRad;  ///< F(c) - level (m)
-  std::vector<S> gradMid, gradRad;    ///< J(X), m x n, row-major
+  std::vector<S> gradMid, gradRad;    ///< the slopes S, m x n, row-major
   bool valid = false;                 ///< every evaluation finite
 };
 
@@ -64,6 +70,7 @@ void buildLeafModel(std::vector<MidRadEvaluator<S>>& evaluators, const Box<S>& b
   model.gradMid.resize(m * n);
   model.gradRad.resize(m * n);
   model.valid = false;
+  const S up = S(1) + S(8) * ScalarTraits<S>::epsilon();
   for (std::size_t i = 0; i < m; ++i) {
     MidRadEvaluator<S>& e = evaluators[i];
     if (!e.run(std::span<const S>(model.centre), std::span<const S>(model.radius), true)) return;
@@ -71,7 +78,14 @@ void buildLeafModel(std::vector<MidRadEvaluator<S>>& evaluators, const Box<S>& b
       model.gradMid[i * n + j] = e.mid(static_cast<int>(j) + 1);
       model.gradRad[i * n + j] = e.rad(static_cast<int>(j) + 1);
     }
-    if (!e.run(std::span<const S>(model.centre), std::span<const S>(zero), false)) return;
+    const bool taylor = e.gradientAffine();
+    if (!e.run(std::span<const S>(model.centre), std::span<const S>(zero), taylor)) return;
+    for (std::size_t j = 0; taylor && j < n; ++j) {
+      // The Taylor slope: grad F(c) +- (its rounding + rad J(X) / 2), the sum rounded up.
+      S& rad = model.gradRad[i * n + j];
+      rad = (e.rad(static_cast<int>(j) + 1) + rad / 2) * up;
+      model.gradMid[i * n + j] = e.mid(static_cast<int>(j) + 1);
+    }
     // The subtraction of the level rounds once: its error joins the radius.
     model.valueMid[i] = e.mid(0) - level[i];
     model.valueRad[i] = e.rad(0) + eps * abs(model.valueMid[i]);
@@ -244,6 +258,55 @@ bool faceKrawczykExcludes(const LeafModel<S>& model, const FacePreconditioner<S>
     if (abs(centre) > reach * (1 + gamma)) return true;
   }
   return false;
+}
+
+/// faceMultipliersExclude's working storage (threadScratch).
+template <class S>
+struct FaceMultiplierWork {
+  std::vector<S> jac, mu, rho, h;  ///< the face's linearisation: m x free, m, m, free
+  MultiplierTest<S> test;
+};
+
+/// True when the multiplier test (framework/core/multipliers.hpp) proves that F - level has no
+/// zero on the face of `box` (the model's leaf) that fixes `axes` (its first k entries) at the
+/// ends `side`. On the face the model gives g(d) in mu + J_free d_free +- rho, with mu and the
+/// fixed axes' part of rho as in faceKrawczykExcludes, J_free the slopes' midpoints on the free
+/// axes and their radii times the free half-widths added to rho; the test decides this
+/// linearisation exactly (up to its least-squares steps), where Krawczyk's preconditioned rows
+/// are only some of its multipliers. `iterations` caps the least-squares steps.
+template <class S>
+bool faceMultipliersExclude(const LeafModel<S>& model, const Box<S>& box, std::span<const int> axes,
+                            int side, int iterations) {
+  using std::abs;
+  if (!model.valid) return false;
+  const std::size_t m = model.valueMid.size(), n = model.centre.size();
+  const std::size_t free = n - axes.size();
+  const S gamma = S(8 * (n + m + 8)) * ScalarTraits<S>::epsilon();
+  const S tiny = S(std::numeric_limits<double>::min());
+  std::optional<FaceMultiplierWork<S>> fresh;
+  FaceMultiplierWork<S>& w = threadScratch<S, FaceMultiplierWork<S>>(fresh);
+  w.jac.resize(m * free), w.mu.resize(m), w.rho.resize(m), w.h.resize(free);
+  const auto isFixed = [&](std::size_t j) {
+    return std::find(axes.begin(), axes.end(), static_cast<int>(j)) != axes.end();
+  };
+  for (std::size_t j = 0, t = 0; j < n; ++j)
+    if (!isFixed(j)) w.h[t++] = model.radius[j];
+  for (std::size_t i = 0; i < m; ++i) {
+    S centre = model.valueMid[i], magnitude = abs(centre), radius = model.valueRad[i];
+    addFixedTerms(model, i, box, axes, side, centre, magnitude, radius);
+    S spread = 0;  // sum over the free axes of rad S_ij h_j
+    for (std::size_t j = 0, t = 0; j < n; ++j) {
+      if (isFixed(j)) continue;
+      w.jac[i * free + t] = model.gradMid[i * n + j];
+      spread += model.gradRad[i * n + j] * w.h[t];
+      ++t;
+    }
+    w.mu[i] = centre;
+    w.rho[i] = (radius + spread) * (1 + gamma) + gamma * magnitude + tiny;
+    if (!isFinite(w.rho[i])) return false;
+  }
+  return w.test.excludes(static_cast<int>(m), static_cast<int>(free), w.jac.data(), w.mu.data(),
+                         w.rho.data(), w.h.data(), gamma, iterations);
 }
 
 }  // namespace ndc
