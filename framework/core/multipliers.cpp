@@ -7,16 +7,6 @@
 
 namespace ndc {
 
-namespace {
-
-/// Index of (row, col) in a row-major matrix with `cols` columns.
-inline std::size_t at(int row, int col, int cols) {
-  return static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) +
-         static_cast<std::size_t>(col);
-}
-
-}  // namespace
-
 template <class S>
 bool MultiplierTest<S>::excludes(int m, int n, const S* jac, const S* mu, const S* rho, const S* h,
                                  const S& tol, int iterations) {
@@ -34,8 +24,9 @@ bool MultiplierTest<S>::excludes(int m, int n, const S* jac, const S* mu, const 
     for (int i = 0; i < m; ++i)
       for (int t = 0; t <= i; ++t) {
         S s = i == t ? rho[i] / yWeight_[i] : S(0);
-        for (int j = 0; j < n; ++j) s += jac[at(i, j, n)] * jac[at(t, j, n)] * h[j] / zWeight_[j];
-        gram_[at(i, t, m)] = s;
+        for (int j = 0; j < n; ++j)
+          s += jac[rowMajor(i, j, n)] * jac[rowMajor(t, j, n)] * h[j] / zWeight_[j];
+        gram_[rowMajor(i, t, m)] = s;
       }
     if (!solveGram(m, mu)) return false;
     S ratio;
@@ -59,25 +50,25 @@ bool MultiplierTest<S>::solveGram(int m, const S* mu) {
   using std::sqrt;
   for (int i = 0; i < m; ++i) {
     for (int t = 0; t <= i; ++t) {
-      S s = gram_[at(i, t, m)];
-      for (int l = 0; l < t; ++l) s -= gram_[at(i, l, m)] * gram_[at(t, l, m)];
+      S s = gram_[rowMajor(i, t, m)];
+      for (int l = 0; l < t; ++l) s -= gram_[rowMajor(i, l, m)] * gram_[rowMajor(t, l, m)];
       if (i == t) {
         if (!(s > 0)) return false;
-        gram_[at(i, i, m)] = sqrt(s);
+        gram_[rowMajor(i, i, m)] = sqrt(s);
       } else {
-        gram_[at(i, t, m)] = s / gram_[at(t, t, m)];
+        gram_[rowMajor(i, t, m)] = s / gram_[rowMajor(t, t, m)];
       }
     }
   }
   for (int i = 0; i < m; ++i) {  // L v = mu
     S s = mu[i];
-    for (int l = 0; l < i; ++l) s -= gram_[at(i, l, m)] * y_[l];
-    y_[i] = s / gram_[at(i, i, m)];
+    for (int l = 0; l < i; ++l) s -= gram_[rowMajor(i, l, m)] * y_[l];
+    y_[i] = s / gram_[rowMajor(i, i, m)];
   }
   for (int i = m - 1; i >= 0; --i) {  // L^T y = v
     S s = y_[i];
-    for (int l = i + 1; l < m; ++l) s -= gram_[at(l, i, m)] * y_[l];
-    y_[i] = s / gram_[at(i, i, m)];
+    for (int l = i + 1; l < m; ++l) s -= gram_[rowMajor(l, i, m)] * y_[l];
+    y_[i] = s / gram_[rowMajor(i, i, m)];
   }
   return true;
 }
@@ -99,8 +90,8 @@ bool MultiplierTest<S>::check(int m, int n, const S* jac, const S* mu, const S* 
   for (int j = 0; j < n; ++j) {
     S z = 0, za = 0;
     for (int i = 0; i < m; ++i) {
-      z += y_[i] * jac[at(i, j, n)];
-      za += abs(y_[i]) * abs(jac[at(i, j, n)]);
+      z += y_[i] * jac[rowMajor(i, j, n)];
+      za += abs(y_[i]) * abs(jac[rowMajor(i, j, n)]);
     }
     z_[j] = z;
     reach += (abs(z) + tol * za) * h[j];

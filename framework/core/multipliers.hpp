@@ -3,11 +3,18 @@
 /// satisfies |mu_i + (J d)_i| <= rho_i for every i (docs/subdivision.md, "multiplier test").
 #pragma once
 
+#include <cstddef>
 #include <vector>
 
 #include "framework/core/scalar.hpp"
 
 namespace ndc {
+
+/// Index of (row, col) in a row-major matrix with `cols` columns.
+inline std::size_t rowMajor(int row, int col, int cols) {
+  return static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) +
+         static_cast<std::size_t>(col);
+}
 
 /// Decides whether the linearised system mu + J d + s = 0, |s_i| <= rho_i, |d_j| <= h_j (m
 /// equations, n unknowns) has no solution, by multipliers y in R^m: every solution satisfies

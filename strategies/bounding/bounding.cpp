@@ -128,16 +128,6 @@ bool IntervalBounding<S>::mayContainZero(const State& state) const {
 
 // --- LinearizedBounding --------------------------------------------------------------------------
 
-namespace {
-
-/// Index of (row, col) in a row-major matrix with `cols` columns.
-inline std::size_t at(int row, int col, int cols) {
-  return static_cast<std::size_t>(row) * static_cast<std::size_t>(cols) +
-         static_cast<std::size_t>(col);
-}
-
-}  // namespace
-
 template <class S>
 bool LinearizedBounding<S>::hasPatch(const Expression& equation) {
   // Above total degree 2 the mean-value form loses too much against the hull; at most 2 it
@@ -258,7 +248,7 @@ bool LinearizedBounding<S>::meanValueExcludes() const {
   for (int i = 0; i < m_; ++i) {
     if (!evaluated_[i]) continue;
     S reach = 0;
-    for (int j = 0; j < n_; ++j) reach += abs(jac_[at(i, j, n_)]) * h_[j];
+    for (int j = 0; j < n_; ++j) reach += abs(jac_[rowMajor(i, j, n_)]) * h_[j];
     if (abs(mu_[i]) > (rho_[i] + reach * up) * up) return true;
   }
   return false;
@@ -308,13 +298,13 @@ bool LinearizedBounding<S>::linearise() const {
   const int n = n_;
   const S up = S(1) + tol_;
   for (int i = 0; i < m_; ++i) {
-    S* jac = &jac_[at(i, 0, n)];
+    S* jac = &jac_[rowMajor(i, 0, n)];
     const MidRadEvaluator<S>& evaluator = evaluators_[i];
     S r = 0;
     if (affine_[i]) {
       for (int j = 0; j < n; ++j) {
-        jac[j] = affineMid_[at(i, j, n)];
-        r += affineRad_[at(i, j, n)] * h_[j];
+        jac[j] = affineMid_[rowMajor(i, j, n)];
+        r += affineRad_[rowMajor(i, j, n)] * h_[j];
       }
     } else {
       if (!evaluator.run(c_, h_, true)) return false;
@@ -350,13 +340,13 @@ bool LinearizedBounding<S>::factorTranspose() const {
   S scale = 0;
   for (int i = 0; i < m; ++i) {
     S s = 0;
-    for (int j = 0; j < n; ++j) s += jac_[at(i, j, n)] * jac_[at(i, j, n)];
+    for (int j = 0; j < n; ++j) s += jac_[rowMajor(i, j, n)] * jac_[rowMajor(i, j, n)];
     scale = std::max(scale, s);
   }
   if (!(scale > 0) || !isfinite(scale)) return false;
   const S pivotFloor = sqrt(scale) * S(1e-10);
   for (int i = 0; i < m; ++i) {
-    S* v = &w_[at(i, 0, n)];
+    S* v = &w_[rowMajor(i, 0, n)];
     S norm2 = 0;
     for (int r = i; r < n; ++r) norm2 += v[r] * v[r];
     const S norm = sqrt(norm2);
@@ -368,21 +358,21 @@ bool LinearizedBounding<S>::factorTranspose() const {
     v[i] -= alpha;
     beta_[i] = 2 / vv;
     diag_[i] = alpha;
-    for (int col = i + 1; col < m; ++col) reflect(i, &w_[at(col, 0, n)]);
+    for (int col = i + 1; col < m; ++col) reflect(i, &w_[rowMajor(col, 0, n)]);
   }
   // Q = H_0 ... H_{m-1}, accumulated backwards (H_i only touches columns >= i of the partial
   // product). Columns 0..m-1 are Q1 (the row space of J_c), m..n-1 are N = Q2 (its kernel).
   std::fill(q_.begin(), q_.end(), S(0));
-  for (int j = 0; j < n; ++j) q_[at(j, j, n)] = 1;
+  for (int j = 0; j < n; ++j) q_[rowMajor(j, j, n)] = 1;
   for (int i = m - 1; i >= 0; --i)
-    for (int col = i; col < n; ++col) reflect(i, &q_[at(col, 0, n)]);
+    for (int col = i; col < n; ++col) reflect(i, &q_[rowMajor(col, 0, n)]);
   return true;
 }
 
 template <class S>
 void LinearizedBounding<S>::reflect(int i, S* x) const {
   // x <- (I - beta_i v_i v_i^T) x on rows i..n-1, v_i the i-th reflector (column i of w_).
-  const S* v = &w_[at(i, 0, n_)];
+  const S* v = &w_[rowMajor(i, 0, n_)];
   S s = 0;
   for (int r = i; r < n_; ++r) s += v[r] * x[r];
   s *= beta_[i];
@@ -396,12 +386,12 @@ void LinearizedBounding<S>::invertLowerFactor() const {
   for (int col = 0; col < m; ++col) {
     for (int i = 0; i < m; ++i) {
       if (i < col) {
-        p_[at(i, col, m)] = 0;
+        p_[rowMajor(i, col, m)] = 0;
         continue;
       }
       S s = i == col ? S(1) : S(0);
-      for (int t = col; t < i; ++t) s -= w_[at(i, t, n)] * p_[at(t, col, m)];
-      p_[at(i, col, m)] = s / diag_[i];
+      for (int t = col; t < i; ++t) s -= w_[rowMajor(i, t, n)] * p_[rowMajor(t, col, m)];
+      p_[rowMajor(i, col, m)] = s / diag_[i];
     }
   }
 }
@@ -418,18 +408,18 @@ bool LinearizedBounding<S>::rowTestExcludes(S& migSq) const {
     for (int j = 0; j < n; ++j) {
       S s = 0, sa = 0;
       for (int t = 0; t <= i; ++t) {
-        s += p_[at(i, t, m)] * jac_[at(t, j, n)];
-        sa += abs(p_[at(i, t, m)]) * abs(jac_[at(t, j, n)]);
+        s += p_[rowMajor(i, t, m)] * jac_[rowMajor(t, j, n)];
+        sa += abs(p_[rowMajor(i, t, m)]) * abs(jac_[rowMajor(t, j, n)]);
       }
-      pj_[at(i, j, n)] = s;
-      pjAbs_[at(i, j, n)] = sa;
+      pj_[rowMajor(i, j, n)] = s;
+      pjAbs_[rowMajor(i, j, n)] = sa;
     }
   for (int i = 0; i < m; ++i) {
     S v = 0, va = 0, vr = 0;  // (P mu)_i, (|P| |mu|)_i, (|P| rho)_i
     for (int t = 0; t <= i; ++t) {
-      v += p_[at(i, t, m)] * mu_[t];
-      va += abs(p_[at(i, t, m)]) * abs(mu_[t]);
-      vr += abs(p_[at(i, t, m)]) * rho_[t];
+      v += p_[rowMajor(i, t, m)] * mu_[t];
+      va += abs(p_[rowMajor(i, t, m)]) * abs(mu_[t]);
+      vr += abs(p_[rowMajor(i, t, m)]) * rho_[t];
     }
     // A lower bound of |(P g)_i| over g in G (the last term covers the roundings here).
     const S absV = abs(v);
@@ -438,7 +428,7 @@ bool LinearizedBounding<S>::rowTestExcludes(S& migSq) const {
     mig_[i] = mig;
     S reach = 0;  // upper bound of sum_j |(P J_c)_ij| h_j
     for (int j = 0; j < n; ++j)
-      reach += (abs(pj_[at(i, j, n)]) + tol * pjAbs_[at(i, j, n)]) * h_[j];
+      reach += (abs(pj_[rowMajor(i, j, n)]) + tol * pjAbs_[rowMajor(i, j, n)]) * h_[j];
     if (mig > reach * up) return true;
     migSq += mig * mig;
   }
@@ -460,13 +450,14 @@ bool LinearizedBounding<S>::ballTestExcludes(const S& migSq, const S& hh) const 
     for (int t = 0; t < m; ++t) {
       S g = 0, ga = 0;
       for (int j = 0; j < n; ++j) {
-        g += pj_[at(i, j, n)] * pj_[at(t, j, n)];
-        ga += abs(pj_[at(i, j, n)]) * abs(pj_[at(t, j, n)]);
+        g += pj_[rowMajor(i, j, n)] * pj_[rowMajor(t, j, n)];
+        ga += abs(pj_[rowMajor(i, j, n)]) * abs(pj_[rowMajor(t, j, n)]);
       }
       row += abs(g) + tol * ga;
     }
     gram = std::max(gram, row);
-    for (int j = 0; j < n; ++j) errF += (tol * pjAbs_[at(i, j, n)]) * (tol * pjAbs_[at(i, j, n)]);
+    for (int j = 0; j < n; ++j)
+      errF += (tol * pjAbs_[rowMajor(i, j, n)]) * (tol * pjAbs_[rowMajor(i, j, n)]);
   }
   const S normBound = (sqrt(gram * up) + sqrt(errF * up)) * up;
   return migSq * (S(1) - tol) > normBound * normBound * hh * up;
@@ -484,13 +475,13 @@ void LinearizedBounding<S>::kernelBounds() const {
   for (int j = 0; j < n; ++j)
     for (int t = 0; t < m; ++t) {
       S s = 0;
-      for (int i = t; i < m; ++i) s += q1(j, i) * p_[at(i, t, m)];
-      pinv_[at(j, t, m)] = s;
+      for (int i = t; i < m; ++i) s += q1(j, i) * p_[rowMajor(i, t, m)];
+      pinv_[rowMajor(j, t, m)] = s;
     }
   for (int j = 0; j < n; ++j) {
     S a = 0, aa = 0, ar = 0;  // (J^+ mu)_j, (|J^+| |mu|)_j, (|J^+| rho)_j
     for (int t = 0; t < m; ++t) {
-      const S& pv = pinv_[at(j, t, m)];
+      const S& pv = pinv_[rowMajor(j, t, m)];
       a += pv * mu_[t];
       aa += abs(pv) * abs(mu_[t]);
       ar += abs(pv) * rho_[t];
@@ -499,8 +490,8 @@ void LinearizedBounding<S>::kernelBounds() const {
     for (int l = 0; l < n; ++l) {
       S d = j == l ? S(1) : S(0), da = d;
       for (int t = 0; t < m; ++t) {
-        d -= pinv_[at(j, t, m)] * jac_[at(t, l, n)];
-        da += abs(pinv_[at(j, t, m)]) * abs(jac_[at(t, l, n)]);
+        d -= pinv_[rowMajor(j, t, m)] * jac_[rowMajor(t, l, n)];
+        da += abs(pinv_[rowMajor(j, t, m)]) * abs(jac_[rowMajor(t, l, n)]);
       }
       for (int p = 0; p < k; ++p) {
         d -= nul(j, p) * nul(l, p);
