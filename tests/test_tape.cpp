@@ -4,10 +4,12 @@
 // the per-operation interval arithmetic it replaces (bit for bit).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -241,4 +243,89 @@ TEST_CASE("Tape: the one-switch de Casteljau gives the whole line where it overf
       ndc::tensorDeCasteljauEnclosure(piece.coefficients(), piece.degrees(), &t);
   CHECK(f.lower() > -2);
   CHECK(f.upper() < 2);
+}
+
+TEST_CASE("Tape: the curvature of quadratics: sums of squares, their negatives, indefinite ones",
+          "[tape]") {
+  // Generated quadratics in R^2..R^8 from random rotations R (rows r_l) and offsets q:
+  //  - sum over l < rank of (r_l . x + q_l)^2 - 1: H = 2 sum r_l r_l^T is positive
+  //    semidefinite of that rank (a sphere in a rotated flat, a cylinder), so sign +1 with a
+  //    slack at rounding level;
+  //  - its negative: sign -1;
+  //  - sum of squares minus one more square, (r_0 . x)^2 - (r_1 . x)^2 + ...: indefinite, sign 0.
+  // And the claim itself, sign d^T H d / 2 >= -slack max d_j^2, at random d (where
+  // d^T H d / 2 = (F(d) + F(-d)) / 2 - F(0), enclosed by midpoint-radius runs).
+  std::mt19937 rng(61);
+  std::normal_distribution<double> gauss;
+  int semidefinite = 0, indefinite = 0;
+  for (int n = 2; n <= 8; ++n) {
+    std::vector<std::string> names;
+    for (int j = 0; j < n; ++j) names.push_back("x" + std::to_string(j));
+    for (int trial = 0; trial < 15; ++trial) {
+      // Rows of a random orthogonal matrix by Gram-Schmidt.
+      std::vector<std::vector<double>> r;
+      while (static_cast<int>(r.size()) < n) {
+        std::vector<double> v(n);
+        for (double& x : v) x = gauss(rng);
+        for (const auto& w : r) {
+          double dot = 0;
+          for (int j = 0; j < n; ++j) dot += v[j] * w[j];
+          for (int j = 0; j < n; ++j) v[j] -= dot * w[j];
+        }
+        double norm = 0;
+        for (double x : v) norm += x * x;
+        for (double& x : v) x /= std::sqrt(norm);
+        r.push_back(v);
+      }
+      const auto square = [&](int l) {
+        std::ostringstream e;
+        e.precision(17);
+        e << "(";
+        for (int j = 0; j < n; ++j) e << (j ? " + " : "") << "(" << r[l][j] << ")*x" << j;
+        e << " + (" << 0.1 * gauss(rng) << "))^2";
+        return e.str();
+      };
+      const int rank = 1 + static_cast<int>(rng() % n);
+      std::string sum;
+      for (int l = 0; l < rank; ++l) sum += (l ? " + " : "") + square(l);
+      const int kind = trial % 3;  // 0: sum, 1: its negative, 2: indefinite
+      std::string text = kind == 1 ? "-(" + sum + ") + 1" : sum + " - 1";
+      if (kind == 2) {
+        if (rank == n) continue;  // no direction left for the negative square
+        text = sum + " - 2*" + square(rank) + " - 1";
+      }
+      const Expression e = Expression::parse(text, names);
+      const ndc::Curvature c = ndc::quadraticCurvature(e.sharedTape());
+      INFO("n = " << n << ", rank " << rank << ": " << text);
+      const int expected = kind == 0 ? 1 : kind == 1 ? -1 : 0;
+      CHECK(c.sign == expected);
+      if (c.sign != 0) {
+        ++semidefinite;
+        CHECK(c.slack < 1e-12);
+        // d^T H d / 2 = (F(d) + F(-d)) / 2 - F(0) for a quadratic: never beyond the slack.
+        const ndc::MidRadEvaluator<double> f(e.sharedTape());
+        const std::vector<double> zero(n, 0.0);
+        for (int s = 0; s < 20; ++s) {
+          std::vector<double> d(n), minus(n);
+          double dMax = 0;
+          for (int j = 0; j < n; ++j)
+            d[j] = gauss(rng), minus[j] = -d[j], dMax = std::max(dMax, std::abs(d[j]));
+          REQUIRE(f.run(d, zero, false));
+          double q = f.mid(0) / 2, bound = f.rad(0) / 2;
+          REQUIRE(f.run(minus, zero, false));
+          q += f.mid(0) / 2, bound += f.rad(0) / 2;
+          REQUIRE(f.run(zero, zero, false));
+          q -= f.mid(0), bound += f.rad(0);
+          CHECK(c.sign * q + bound >= -c.slack * dMax * dMax);
+        }
+      } else {
+        ++indefinite;
+      }
+    }
+  }
+  CHECK(semidefinite >= 50);
+  CHECK(indefinite >= 20);
+  // Not quadratics: affine, cubic, piecewise leaves have no curvature.
+  CHECK(ndc::quadraticCurvature(Expression::parse("x - 2*y + z", kXyz).sharedTape()).sign == 0);
+  CHECK(ndc::quadraticCurvature(Expression::parse("x^3 + y^2", kXyz).sharedTape()).sign == 0);
 }

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace ndc {
 
@@ -212,6 +213,98 @@ void MidRadEvaluator<S>::power(int p, S* xm, S* xr) const {
   for (std::size_t q = 1; q < stride_; ++q)
     if (!isZero(xm[q], xr[q])) mulMidRad(fm, fr, xm[q], xr[q], u, up, xm[q], xr[q]);
   mulMidRad(tm, tr, xm[0], xr[0], u, up, xm[0], xr[0]);
+}
+
+namespace {
+
+/// Whether +-M is positive semidefinite up to a proven slack (quadraticCurvature's
+/// factorisation and bound); `radius` bounds |H - M| entrywise.
+bool semidefiniteSlack(int n, const std::vector<double>& m, const std::vector<double>& radius,
+                       double& slack) {
+  using std::abs;
+  const double eps = ScalarTraits<double>::epsilon();
+  const double gamma = double(2 * n + 16) * eps;
+  const auto at = [n](int j, int k) { return std::size_t(j) * std::size_t(n) + std::size_t(k); };
+  // Pivoted L D L^T of m, largest remaining diagonal first; l holds the columns found.
+  std::vector<double> work = m, l, d;
+  std::vector<char> done(std::size_t(n), 0);
+  double scale = 0, total = 0;
+  for (int j = 0; j < n; ++j) scale = std::max(scale, abs(m[at(j, j)]));
+  for (double v : m) total += abs(v);
+  for (int step = 0; step < n; ++step) {
+    int p = -1;
+    for (int j = 0; j < n; ++j)
+      if (!done[j] && (p < 0 || work[at(j, j)] > work[at(p, p)])) p = j;
+    if (p < 0 || !(work[at(p, p)] > 1e-12 * scale)) break;
+    const double pivot = work[at(p, p)];
+    done[p] = 1;
+    const std::size_t column = l.size();
+    l.resize(column + std::size_t(n), 0.0);
+    for (int j = 0; j < n; ++j) l[column + j] = done[j] && j != p ? 0.0 : work[at(j, p)] / pivot;
+    l[column + p] = 1;
+    d.push_back(pivot);
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k) work[at(j, k)] -= l[column + j] * pivot * l[column + k];
+  }
+  // B_jk >= |H_jk - (L D L^T)_jk|: the computed residual, its rounding and the radius.
+  double sum = 0;
+  const std::size_t rank = d.size();
+  for (int j = 0; j < n; ++j)
+    for (int k = 0; k < n; ++k) {
+      double product = 0, magnitude = 0;
+      for (std::size_t t = 0; t < rank; ++t) {
+        const double v = l[t * n + j] * d[t] * l[t * n + k];
+        product += v;
+        magnitude += abs(v);
+      }
+      const double residual = m[at(j, k)] - product;
+      sum +=
+          (abs(residual) + gamma * (abs(m[at(j, k)]) + magnitude) + radius[at(j, k)]) * (1 + gamma);
+    }
+  slack = sum / 2 * (1 + gamma);
+  return std::isfinite(slack) && slack <= 1e-8 * total + std::numeric_limits<double>::min();
+}
+
+}  // namespace
+
+Curvature quadraticCurvature(const std::shared_ptr<const Tape>& tape) {
+  using std::abs;
+  if (!tape->leaves().empty() || tape->totalDegree(3) != 2) return {};
+  const int n = tape->dim();
+  const double eps = ScalarTraits<double>::epsilon();
+  MidRadEvaluator<double> e(tape);
+  const auto size = static_cast<std::size_t>(n);
+  std::vector<double> x(size, 0.0), zero(size, 0.0);
+  std::vector<double> g0m(size), g0r(size);
+  if (!e.run(x, zero, true)) return {};
+  for (int j = 0; j < n; ++j) g0m[j] = e.mid(j + 1), g0r[j] = e.rad(j + 1);
+  // Column k of H: grad F(e_k) - grad F(0) (the gradient is affine), with its radius.
+  std::vector<double> hm(size * size), hr(size * size);
+  for (int k = 0; k < n; ++k) {
+    x[k] = 1;
+    if (!e.run(x, zero, true)) return {};
+    x[k] = 0;
+    for (int j = 0; j < n; ++j) {
+      const double diff = e.mid(j + 1) - g0m[j];
+      hm[std::size_t(j) * n + k] = diff;
+      hr[std::size_t(j) * n + k] = (e.rad(j + 1) + g0r[j] + eps * abs(diff)) * (1 + 4 * eps);
+    }
+  }
+  // H is symmetric: its midpoint M, and |H_jk - M_jk| <= hr_jk + |hm_jk - M_jk|.
+  std::vector<double> m(hm.size()), radius(hm.size());
+  for (int j = 0; j < n; ++j)
+    for (int k = 0; k < n; ++k) {
+      const std::size_t jk = std::size_t(j) * n + k, kj = std::size_t(k) * n + j;
+      m[jk] = (hm[jk] + hm[kj]) / 2;
+      radius[jk] = (hr[jk] + abs(hm[jk] - m[jk]) + eps * abs(m[jk])) * (1 + 4 * eps);
+    }
+  for (int sign : {1, -1}) {
+    std::vector<double> signed_ = m;
+    for (double& v : signed_) v *= sign;
+    double slack = 0;
+    if (semidefiniteSlack(n, signed_, radius, slack)) return {sign, slack};
+  }
+  return {};
 }
 
 template class MidRadEvaluator<double>;

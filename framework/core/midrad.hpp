@@ -3,6 +3,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -10,6 +11,24 @@
 #include "framework/core/tape.hpp"
 
 namespace ndc {
+
+/// Whether the constant Hessian H of a quadratic program is semidefinite, for one-sided Taylor
+/// remainders: F(c + d) - F(c) - grad F(c) . d = d^T H d / 2, which for a sum of squares (a
+/// sphere, an ellipsoid, a cylinder) is never negative.
+struct Curvature {
+  /// +1: d^T H d / 2 >= -slack max_j d_j^2 for every d; -1: d^T H d / 2 <= slack max_j d_j^2;
+  /// 0: neither is proven (H indefinite, or the program is not a quadratic without leaves).
+  int sign = 0;
+  double slack = 0;  ///< rounded up; covers the rounding of H's enclosure and factorisation
+};
+
+/// The curvature of `tape`, proven in double: H enclosed column by column from gradients
+/// (grad F(e_k) - grad F(0), midpoint-radius), then an approximate pivoted factorisation
+/// +-H ~ L D L^T with D > 0 (stopped where the remaining pivots are below 1e-12 of the largest
+/// diagonal), so that d^T (+-H) d >= -sum_jk B_jk |d_j| |d_k| with B bounding H - L D L^T
+/// (the enclosure's radius, the symmetrisation and every rounding). Accepted when the slack is
+/// below 1e-8 of sum |H_jk|; otherwise sign 0.
+Curvature quadraticCurvature(const std::shared_ptr<const Tape>& tape);
 
 /// Runs a Tape on a box given as centre +- radius in midpoint-radius arithmetic: every
 /// operation rounds to nearest and adds a bound on its rounding error (and the radii's) to the
@@ -38,6 +57,11 @@ class MidRadEvaluator {
   /// so that its gradient is affine: F(c + d) = F(c) + grad F(c) . d + d^T H d / 2 exactly, and
   /// a gradient enclosed over c +- h has radius at least sum_l |H_jl| h_l along each axis j.
   bool gradientAffine() const { return gradientAffine_; }
+  /// quadraticCurvature of the program, computed on first use (then cached).
+  const Curvature& curvature() const {
+    if (!curvature_) curvature_ = quadraticCurvature(tape_);
+    return *curvature_;
+  }
 
  private:
   /// Pushes a constant, variable or leaf into slot (m, r).
@@ -54,6 +78,7 @@ class MidRadEvaluator {
   std::vector<S> constMid_, constRad_;  // per constant
   S u_, up_;  // unit of the arithmetic (>= 2 x unit round-off) and 1 + 8 u
   bool gradientAffine_ = false;
+  mutable std::optional<Curvature> curvature_;
   // Per run: the stride (n + 1 or 1), the centre and radii, the stack ((n + 1) per slot) and
   // the enclosures of each distinct leaf ((n + 1) per leaf).
   mutable std::size_t stride_ = 1;

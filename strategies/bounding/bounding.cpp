@@ -300,7 +300,7 @@ bool LinearizedBounding<S>::linearise() const {
   for (int i = 0; i < m_; ++i) {
     S* jac = &jac_[rowMajor(i, 0, n)];
     const MidRadEvaluator<S>& evaluator = evaluators_[i];
-    S r = 0;
+    S r = 0, shift = 0;  // rho's term of the linearisation; mu's shift (one-sided remainder)
     if (affine_[i]) {
       for (int j = 0; j < n; ++j) {
         jac[j] = affineMid_[rowMajor(i, j, n)];
@@ -310,8 +310,10 @@ bool LinearizedBounding<S>::linearise() const {
       if (!evaluator.run(c_, h_, true)) return false;
       for (int j = 0; j < n; ++j) r += evaluator.rad(j + 1) * h_[j];
       if (quadratic_[i]) {
-        // d^T H d / 2 from the gradient's radius over X, the gradient itself at c.
+        // d^T H d / 2 in [-r/2, r/2] from the gradient's radius over X (one-sided for a
+        // semidefinite H), the gradient itself at c.
         r /= 2;
+        oneSided(evaluator.curvature(), r, shift);
         if (!evaluator.run(c_, zero_, true)) return false;
         for (int j = 0; j < n; ++j) {
           jac[j] = evaluator.mid(j + 1);
@@ -322,11 +324,25 @@ bool LinearizedBounding<S>::linearise() const {
       }
     }
     if (!quadratic_[i] && !evaluator.run(c_, zero_, false)) return false;
-    mu_[i] = evaluator.mid(0);
-    rho_[i] = (evaluator.rad(0) + r * up) * up;
+    using std::abs;
+    mu_[i] = evaluator.mid(0) + shift;  // rounded: u |mu| joins rho
+    rho_[i] = (evaluator.rad(0) + r * up + u_ * abs(mu_[i])) * up;
     if (!isfinite(rho_[i])) return false;
   }
   return true;
+}
+
+template <class S>
+void LinearizedBounding<S>::oneSided(const Curvature& curvature, S& r, S& shift) const {
+  // With sign +1, d^T H d / 2 lies in [-e, r] (e = slack max_j h_j^2) instead of [-r, r]: the
+  // centre moves by (r - e) / 2 and the radius becomes (r + e) / 2 (sign -1: mirrored).
+  if (curvature.sign == 0) return;
+  S hMax = 0;
+  for (int j = 0; j < n_; ++j) hMax = std::max(hMax, h_[j]);
+  const S up = S(1) + tol_;
+  const S e = S(curvature.slack) * hMax * hMax * up;
+  shift = S(curvature.sign) * (r - e) / 2;
+  r = (r + e) / 2 * up;
 }
 
 template <class S>

@@ -140,7 +140,10 @@ class IntervalBounding final {
 /// Taylor form, F_i(c + d) = F_i(c) + grad F_i(c) . d + d^T H_i d / 2 exactly, so
 /// |F_i(c + d) - F_i(c) - J_c,i d| <= sum_j (rad grad_j F_i(c) + rad J_ij(X) / 2) h_j with
 /// J_c,i the midpoint of the gradient enclosed at c (rad J_ij(X) >= sum_l |H_i,jl| h_l, the
-/// radius of the gradient's range): half the mean-value form's remainder.
+/// radius of the gradient's range): half the mean-value form's remainder. Where H_i is proven
+/// semidefinite (a sum of squares: spheres, ellipsoids, cylinders; quadraticCurvature), the
+/// remainder d^T H_i d / 2 has one sign, so G_i is the one-sided [0, r_i] (up to the proof's
+/// slack) instead of [-r_i, r_i]: half as wide again.
 /// The identities hold for the matrices actually computed (P, J^+, N are just some matrices),
 /// and every floating-point product is bounded with the standard error bound gamma_p of
 /// p-term dot products (a relative margin of 8 (n + m + 8) eps on every bound), so rounding
@@ -210,6 +213,9 @@ class LinearizedBounding final {
   S centreAndHalfWidths(const Box<S>& box) const;
   /// 2: J_c (jac_), mid F(c) (mu_) and the radii rho_; false when an enclosure is not finite.
   bool linearise() const;
+  /// For a semidefinite quadratic (`curvature`), the Taylor remainder [-r, r] made one-sided:
+  /// `r` becomes its half-width and `shift` its centre.
+  void oneSided(const Curvature& curvature, S& r, S& shift) const;
   /// 3: Householder QR of J_c^T into w_, beta_, diag_ and Q (q_); false when J_c is (nearly)
   /// rank-deficient.
   bool factorTranspose() const;

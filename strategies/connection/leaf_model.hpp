@@ -41,7 +41,9 @@ void centreAndRadius(const Box<S>& box, std::vector<S>& centre, std::vector<S>& 
 /// J(X) by the mean value theorem, or, for an equation whose gradient is affine (total degree
 /// 2, MidRadEvaluator::gradientAffine), its Taylor form grad F_i(c) + H_i d / 2, enclosed by the
 /// gradient at c plus half the radius of J(X) (which is at least sum_l |H_jl| radius_l): half
-/// the mean-value form's spread. Slopes, not derivatives, so the model proves only that a face
+/// the mean-value form's spread. Where H_i is proven semidefinite (MidRadEvaluator::curvature)
+/// the slopes are the gradient at c alone and the one-sided remainder d^T H_i d / 2 joins the
+/// value instead, half as wide again. Slopes, not derivatives, so the model proves only that a face
 /// holds no zero (faceExcluded, faceKrawczykExcludes), never that a zero is unique. It
 /// is built with one evaluation per equation, and then encloses F on each of the leaf's faces
 /// in O(n) operations per equation (faceExcluded), where an evaluation on the face costs a
@@ -80,15 +82,35 @@ void buildLeafModel(std::vector<MidRadEvaluator<S>>& evaluators, const Box<S>& b
     }
     const bool taylor = e.gradientAffine();
     if (!e.run(std::span<const S>(model.centre), std::span<const S>(zero), taylor)) return;
+    const int sign = taylor ? e.curvature().sign : 0;
+    S remainder = 0;  // sum_j rad J_ij(X) radius_j / 2 >= |d^T H d| / 2 (semidefinite H)
     for (std::size_t j = 0; taylor && j < n; ++j) {
-      // The Taylor slope: grad F(c) +- (its rounding + rad J(X) / 2), the sum rounded up.
+      // The Taylor slope: grad F(c) +- (its rounding + rad J(X) / 2), the sum rounded up; for
+      // a semidefinite H the gradient at c alone, the remainder moved into the value below.
       S& rad = model.gradRad[i * n + j];
-      rad = (e.rad(static_cast<int>(j) + 1) + rad / 2) * up;
+      if (sign != 0) {
+        remainder += rad * model.radius[j];
+        rad = e.rad(static_cast<int>(j) + 1);
+      } else {
+        rad = (e.rad(static_cast<int>(j) + 1) + rad / 2) * up;
+      }
       model.gradMid[i * n + j] = e.mid(static_cast<int>(j) + 1);
     }
     // The subtraction of the level rounds once: its error joins the radius.
     model.valueMid[i] = e.mid(0) - level[i];
     model.valueRad[i] = e.rad(0) + eps * abs(model.valueMid[i]);
+    if (sign != 0) {
+      // d^T H d / 2 in [-slack, remainder] (sign +1; mirrored for -1), slack = the proof's
+      // slack times the largest squared radius: its centre joins the value, its radius the
+      // value's radius.
+      S radiusMax = 0;
+      for (std::size_t j = 0; j < n; ++j) radiusMax = std::max(radiusMax, model.radius[j]);
+      const S slack = S(e.curvature().slack) * radiusMax * radiusMax * up;
+      remainder = remainder / 2 * up;
+      model.valueMid[i] += S(sign) * (remainder - slack) / 2;
+      model.valueRad[i] =
+          (model.valueRad[i] + (remainder + slack) / 2 + eps * abs(model.valueMid[i])) * up;
+    }
   }
   model.valid = true;
 }
