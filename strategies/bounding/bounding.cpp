@@ -273,7 +273,18 @@ bool LinearizedBounding<S>::linearisedSystemExcludes(const S& hh) const {
   kernelBounds();                                // 7
   if (kernelPropagationExcludes()) return true;
   if (n_ - m_ == 2 && kernelPolygonExcludes()) return true;
-  return multiplierExcludes();  // 8
+  // 8, unless d = -J^+ mu solves the linearised system well inside the box: then no
+  // multipliers exist (Farkas), and the boxes around M, where this holds, skip the search.
+  return !centreSolvesInside() && multiplierExcludes();
+}
+
+template <class S>
+bool LinearizedBounding<S>::centreSolvesInside() const {
+  using std::abs;
+  const S inside = S(1) - S(1e-6);
+  for (int j = 0; j < n_; ++j)
+    if (!(abs(a_[j]) < h_[j] * inside)) return false;
+  return true;
 }
 
 template <class S>

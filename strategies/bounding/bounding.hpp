@@ -238,6 +238,10 @@ class LinearizedBounding final {
   bool kernelPolygonExcludes() const;
   /// 8: the multiplier test (reweighted least squares for y); true when some y excludes.
   bool multiplierExcludes() const;
+  /// True when d = -J^+ mid G (step 7's centres a_) lies inside the box by a relative 1e-6 on
+  /// every axis: it solves J_c d = -mid G, so the linearised system is solvable, no multipliers
+  /// exist, and step 8 is skipped (a heuristic only in that skipping never discards a box).
+  bool centreSolvesInside() const;
   /// Q1 (row space of J_c) and N = Q2 (its kernel) as n x m and n x k matrices.
   const S& q1(int row, int col) const {
     return q_[static_cast<std::size_t>(col) * static_cast<std::size_t>(n_) +
