@@ -624,14 +624,21 @@ TEST_CASE("linearized test never discards a box around a point of the manifold",
         off.hi[j] = off.lo[j] + 2e-3;
       }
       CHECK(bounding.linearizationExcludes(off));
-      // Which equations have a patch: the sphere only up to R^6, the hyperplanes always.
+      // Which equations have a patch: the sphere only up to R^6, the hyperplanes never (their
+      // range is exact from the constant gradient).
       for (const ndc::Expression& e : m.problem.equations) {
         const bool affine = e.tape().totalDegree(2) <= 1;
-        CHECK(ndc::LinearizedBounding<double>::hasPatch(e) == (affine || n <= 6));
+        CHECK(ndc::LinearizedBounding<double>::hasPatch(e) == (!affine && n <= 6));
       }
-      // The mean-value test discards a box where only the sphere excludes 0: the unit sphere
-      // is far from a small box at 0.
-      ndc::Box<double> centre{std::vector<double>(n, -1e-3), std::vector<double>(n, 1e-3)};
+      // The mean-value test discards a box where only the sphere excludes 0: a small box at
+      // the mean of points of the circle, which lies on every hyperplane and inside the sphere.
+      std::vector<double> mean(n, 0.0);
+      for (int s = 0; s < 64; ++s) {
+        const std::vector<double> q = m.sample(rng);
+        for (int j = 0; j < n; ++j) mean[j] += q[j] / 64;
+      }
+      ndc::Box<double> centre{mean, mean};
+      for (int j = 0; j < n; ++j) centre.lo[j] -= 1e-3, centre.hi[j] += 1e-3;
       CHECK(bounding.meanValueExcludes(centre) == (n > 6));
     }
   }

@@ -133,6 +133,8 @@ bool LinearizedBounding<S>::hasPatch(const Expression& equation) {
   // Above total degree 2 the mean-value form loses too much against the hull; at most 2 it
   // is as tight up to O(h^2) (exact for an affine F_i), and cheaper once the dense form is large.
   if (equation.tape().totalDegree(3) > 2) return true;
+  // An affine equation's range is exact from its constant gradient (no halving, no scan).
+  if (equation.tape().totalDegree(2) <= 1 && equation.tape().leaves().empty()) return false;
   double coefficients = 1;
   for (int d : equation.degrees()) coefficients *= d + 1;
   return coefficients <= kMaxDensePatch;
@@ -227,8 +229,12 @@ bool LinearizedBounding<S>::mayContainZero(const State& state) const {
   // Equations without a patch: their mean-value forms, then the simultaneous test on the same
   // linearisation.
   const S hh = centreAndHalfWidths(state.box);
-  if (!linearise()) return true;
-  if (meanValueExcludes()) return false;
+  // The affine rows first: their exact ranges discard most boxes far from M for a tape run
+  // each, before the curved rows' evaluations over the box.
+  if (!lineariseRows(true)) return true;
+  if (meanValueExcludes(true)) return false;
+  if (!lineariseRows(false)) return true;
+  if (meanValueExcludes(false)) return false;
   return !enabled_ || !linearisedSystemExcludes(hh);
 }
 
@@ -236,17 +242,17 @@ template <class S>
 bool LinearizedBounding<S>::meanValueExcludes(const Box<S>& box) const {
   if (!anyEvaluated_) return false;
   centreAndHalfWidths(box);
-  return linearise() && meanValueExcludes();
+  return linearise() && (meanValueExcludes(true) || meanValueExcludes(false));
 }
 
 template <class S>
-bool LinearizedBounding<S>::meanValueExcludes() const {
+bool LinearizedBounding<S>::meanValueExcludes(bool affine) const {
   // F_i(x) = F_i(c) + J_i(xi) (x - c) with J_i(xi) in jac_i +- rad, so F_i(X) lies in
   // mu_i +- (rho_i + sum_j |jac_ij| h_j): the range itself for an affine F_i.
   using std::abs;
   const S up = S(1) + tol_;
   for (int i = 0; i < m_; ++i) {
-    if (!evaluated_[i]) continue;
+    if (!evaluated_[i] || bool(affine_[i]) != affine) continue;
     S reach = 0;
     for (int j = 0; j < n_; ++j) reach += abs(jac_[rowMajor(i, j, n_)]) * h_[j];
     if (abs(mu_[i]) > (rho_[i] + reach * up) * up) return true;
@@ -302,17 +308,24 @@ S LinearizedBounding<S>::centreAndHalfWidths(const Box<S>& box) const {
 
 template <class S>
 bool LinearizedBounding<S>::linearise() const {
+  return lineariseRows(true) && lineariseRows(false);
+}
+
+template <class S>
+bool LinearizedBounding<S>::lineariseRows(bool affine) const {
   // 2. The linearised system J_c d = -g, g in G = mu_i +- rho_i: F(c) enclosed at the point,
   // J_c = mid J(X), r_i = sum_j mag(J_ij(X) - J_c,ij) h_j = sum_j rad J_ij(X) h_j (mean value
   // theorem); for a quadratic J_c = mid grad F(c) and the Taylor remainder (class comment).
+  using std::abs;
   using std::isfinite;
   const int n = n_;
   const S up = S(1) + tol_;
   for (int i = 0; i < m_; ++i) {
+    if (bool(affine_[i]) != affine) continue;
     S* jac = &jac_[rowMajor(i, 0, n)];
     const MidRadEvaluator<S>& evaluator = evaluators_[i];
     S r = 0, shift = 0;  // rho's term of the linearisation; mu's shift (one-sided remainder)
-    if (affine_[i]) {
+    if (affine) {
       for (int j = 0; j < n; ++j) {
         jac[j] = affineMid_[rowMajor(i, j, n)];
         r += affineRad_[rowMajor(i, j, n)] * h_[j];
@@ -335,7 +348,6 @@ bool LinearizedBounding<S>::linearise() const {
       }
     }
     if (!quadratic_[i] && !evaluator.run(c_, zero_, false)) return false;
-    using std::abs;
     mu_[i] = evaluator.mid(0) + shift;  // rounded: u |mu| joins rho
     rho_[i] = (evaluator.rad(0) + r * up + u_ * abs(mu_[i])) * up;
     if (!isfinite(rho_[i])) return false;

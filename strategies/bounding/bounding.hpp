@@ -100,8 +100,10 @@ class IntervalBounding final {
 /// from M; the simultaneous test removes most of these.
 ///
 /// Per-equation test. An equation is subdivided in Bernstein form and tested by its hull, as in
-/// `bernstein`, unless its total degree is at most 2 and its dense form has more than
-/// kMaxDensePatch coefficients (the product of (degree + 1) over the variables). Such an
+/// `bernstein`, unless it is affine (without piecewise leaves: its range over a box is exact
+/// from its constant gradient, tested before the curved equations are evaluated) or its total
+/// degree is at most 2 and its dense form has more than kMaxDensePatch coefficients (the
+/// product of (degree + 1) over the variables). Such an
 /// equation is enclosed by its mean-value form F_i(c) + J_i(X) (X - c) instead, from the same
 /// midpoint-radius evaluation the simultaneous test uses: for total degree <= 2 it is as tight
 /// as the hull up to O(h^2) (the exact range for an affine F_i), while the dense form is
@@ -189,22 +191,22 @@ class LinearizedBounding final {
   /// Largest dense Bernstein form (coefficients, the product of (degree + 1) over the
   /// variables) an equation of total degree <= 2 is subdivided in; a larger one is enclosed by
   /// its mean-value form instead (see the class comment). 1024 keeps every quadratic up to
-  /// n = 6 (3^6 = 729) and every affine equation up to n = 10 in Bernstein form.
+  /// n = 6 (3^6 = 729) in Bernstein form (affine equations never have one).
   static constexpr double kMaxDensePatch = 1024;
   /// Reweighted least-squares steps of the multiplier test (step 8) per box. On the rotated
   /// 2-sphere in R^7 the best y was found within 8 steps for 96% of the boxes the exact
   /// linear program discards (docs/subdivision.md).
   static constexpr int kMultiplierIterations = 8;
-  /// True when `equation` is subdivided in Bernstein form (total degree above 2, or at most
-  /// kMaxDensePatch coefficients).
+  /// True when `equation` is subdivided in Bernstein form (total degree above 2, or 2 with at
+  /// most kMaxDensePatch coefficients, or a piecewise affine one).
   static bool hasPatch(const Expression& equation);
 
  private:
   /// `problem` with only the equations that have a patch.
   static Problem patchedEquations(const Problem& problem);
-  /// The mean-value test of each equation without a patch, after steps 1 and 2; true when one
-  /// excludes 0.
-  bool meanValueExcludes() const;
+  /// The mean-value test of each equation without a patch, affine or not, after steps 1 and 2
+  /// (for those rows); true when one excludes 0.
+  bool meanValueExcludes(bool affine) const;
   /// Steps 3 to 7 after steps 1 and 2 (`hh` from step 1); true when the box is discarded.
   bool linearisedSystemExcludes(const S& hh) const;
   // The steps of linearizationExcludes (numbered as in the class comment), on the scratch
@@ -213,6 +215,8 @@ class LinearizedBounding final {
   S centreAndHalfWidths(const Box<S>& box) const;
   /// 2: J_c (jac_), mid F(c) (mu_) and the radii rho_; false when an enclosure is not finite.
   bool linearise() const;
+  /// Step 2 for the affine rows only, or for the others only.
+  bool lineariseRows(bool affine) const;
   /// For a semidefinite quadratic (`curvature`), the Taylor remainder [-r, r] made one-sided:
   /// `r` becomes its half-width and `shift` its centre.
   void oneSided(const Curvature& curvature, S& r, S& shift) const;
