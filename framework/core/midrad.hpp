@@ -30,6 +30,24 @@ struct Curvature {
 /// below 1e-8 of sum |H_jk|; otherwise sign 0.
 Curvature quadraticCurvature(const std::shared_ptr<const Tape>& tape);
 
+/// The Taylor remainder d^T H d / 2 over |d_j| <= h_j as a centre and radius, from `bound` >=
+/// |d^T H d| / 2 (rounded up) and hMax = max_j h_j: [-bound, bound] for sign 0, and for a
+/// semidefinite H the one-sided [-e, bound] (sign +1) or [-bound, e] (sign -1) with
+/// e = slack hMax^2 (rounded up by `up`). The centre and radius are rounded to nearest: the
+/// caller rounds the radius up with the sums it joins.
+template <class S>
+void taylorRemainder(const Curvature& curvature, const S& bound, const S& hMax, const S& up,
+                     S& centre, S& radius) {
+  if (curvature.sign == 0) {
+    centre = 0;
+    radius = bound;
+    return;
+  }
+  const S e = S(curvature.slack) * hMax * hMax * up;
+  centre = S(curvature.sign) * (bound - e) / 2;
+  radius = (bound + e) / 2;
+}
+
 /// Runs a Tape on a box given as centre +- radius in midpoint-radius arithmetic: every
 /// operation rounds to nearest and adds a bound on its rounding error (and the radii's) to the
 /// radius, so the result encloses the range as rigorously as outward-rounded intervals, without

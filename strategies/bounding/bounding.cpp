@@ -363,9 +363,9 @@ void LinearizedBounding<S>::oneSided(const Curvature& curvature, S& r, S& shift)
   S hMax = 0;
   for (int j = 0; j < n_; ++j) hMax = std::max(hMax, h_[j]);
   const S up = S(1) + tol_;
-  const S e = S(curvature.slack) * hMax * hMax * up;
-  shift = S(curvature.sign) * (r - e) / 2;
-  r = (r + e) / 2 * up;
+  S radius;
+  taylorRemainder(curvature, r, hMax, up, shift, radius);
+  r = radius * up;
 }
 
 template <class S>

@@ -105,12 +105,12 @@ void buildLeafModel(std::vector<MidRadEvaluator<S>>& evaluators, const Box<S>& b
       // value's radius.
       S radiusMax = 0;
       for (std::size_t j = 0; j < n; ++j) radiusMax = std::max(radiusMax, model.radius[j]);
-      const S slack = S(e.curvature().slack) * radiusMax * radiusMax * up;
       // The sum of n terms above rounds by at most (n - 1) units: gamma_n covers it.
       remainder = remainder / 2 * (S(1) + S(4 * (n + 4)) * ScalarTraits<S>::epsilon());
-      model.valueMid[i] += S(sign) * (remainder - slack) / 2;
-      model.valueRad[i] =
-          (model.valueRad[i] + (remainder + slack) / 2 + eps * abs(model.valueMid[i])) * up;
+      S centre, radius;
+      taylorRemainder(e.curvature(), remainder, radiusMax, up, centre, radius);
+      model.valueMid[i] += centre;
+      model.valueRad[i] = (model.valueRad[i] + radius + eps * abs(model.valueMid[i])) * up;
     }
   }
   model.valid = true;
