@@ -12,6 +12,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 #include <cstddef>
 #include <optional>
@@ -73,6 +74,47 @@ void parallelFor(std::size_t count, Body&& body, std::size_t grain = 1) {
       },
       grain);
 }
+
+/// One task run beside the calling thread on the current task arena: start(work) returns at
+/// once and wait() when `work` is done, rethrowing what it threw. Meanwhile the caller may do
+/// sequential work that `work` neither reads nor writes, so the outputs do not depend on the
+/// thread count (with one thread, wait() runs `work` itself). `work` may run parallel loops and
+/// sees the caller's MPFR precision; it is called as const. The destructor cancels and waits: an
+/// exception in the caller never leaves the task running.
+class TaskBeside {
+ public:
+  TaskBeside() = default;
+  TaskBeside(const TaskBeside&) = delete;
+  TaskBeside& operator=(const TaskBeside&) = delete;
+  ~TaskBeside() {
+    if (!running_) return;
+    group_.cancel();
+    try {
+      group_.wait();
+    } catch (...) {  // the caller's exception is the one that propagates
+    }
+  }
+
+  template <class Work>
+  void start(Work&& work) {
+    wait();
+    running_ = true;
+    group_.run([bits = mpfrPrecision(), work = std::forward<Work>(work)] {
+      const WorkerPrecision precision(bits);
+      work();
+    });
+  }
+
+  void wait() {
+    if (!running_) return;
+    running_ = false;
+    group_.wait();
+  }
+
+ private:
+  tbb::task_group group_;
+  bool running_ = false;
+};
 
 /// Sorts [first, last) by `less` on the current task arena. `less` must be a strict total
 /// order on the elements' values (two elements compare equal only when they are equal), so

@@ -306,17 +306,68 @@ class FaceStore {
     } else if (b.count == 0) {
       b.first = end;
     }
-    FaceRecord kept{-1,       r.degenerate, kind,     r.roots,
-                    r.degree, r.certain,    r.proven, r.withinRounding};
-    if (!r.root.empty()) {
-      kept.root = static_cast<std::int64_t>(roots_.size());
-      roots_.insert(roots_.end(), r.root.begin(), r.root.end());
-    }
+    FaceRecord kept = record(kind, r, r.root.empty() ? -1 : std::int64_t(roots_.size()));
+    roots_.insert(roots_.end(), r.root.begin(), r.root.end());
     // The block is the last one now: insert in kind order.
     const auto at = std::lower_bound(records_.begin() + b.first, records_.end(), kind, byKind);
     const auto it = records_.insert(at, kept);
     ++b.count;
     return &*it;
+  }
+
+  /// Keeps the faces a window of leaves solved: `solved(i)`, a range of (kind, FaceResult) in
+  /// kind order, are the new faces of leaves[i] (ascending). A leaf with faces of an earlier
+  /// round takes add; the others' blocks are placed at the end by prefix sums and filled in
+  /// parallel, each task writing only its leaf's block.
+  template <class Solved>
+  void addBlocks(std::span<const std::int32_t> leaves, const Solved& solved) {
+    if (leaves.empty()) return;
+    if (blocks_.size() <= std::size_t(leaves.back()))
+      blocks_.resize(std::size_t(leaves.back()) + 1);
+    for (std::size_t i = 0; i < leaves.size(); ++i) {
+      if (blocks_[std::size_t(leaves[i])].count == 0) continue;
+      for (const auto& [kind, r] : solved(i)) add(leaves[i], kind, r);
+    }
+    // The fresh leaves' places: records and roots in leaf order.
+    std::vector<std::int64_t> rootAt(leaves.size(), -1);
+    auto records = static_cast<std::int64_t>(records_.size());
+    std::size_t roots = roots_.size();
+    std::vector<std::size_t> fresh;
+    for (std::size_t i = 0; i < leaves.size(); ++i) {
+      Block& b = blocks_[std::size_t(leaves[i])];
+      const auto& list = solved(i);
+      if (b.count > 0 || list.empty()) continue;
+      fresh.push_back(i);
+      b.first = records;
+      b.count = static_cast<std::int32_t>(list.size());
+      records += b.count;
+      rootAt[i] = static_cast<std::int64_t>(roots);
+      for (const auto& entry : list) roots += entry.second.root.size();
+    }
+    records_.resize(std::size_t(records));
+    roots_.resize(roots);
+    parallelFor(fresh.size(), [&](std::size_t f) {
+      const std::size_t i = fresh[f];
+      auto out = records_.begin() + blocks_[std::size_t(leaves[i])].first;
+      std::int64_t root = rootAt[i];
+      for (const auto& [kind, r] : solved(i)) {
+        *out++ = record(kind, r, r.root.empty() ? -1 : root);
+        std::copy(r.root.begin(), r.root.end(), roots_.begin() + root);
+        root += static_cast<std::int64_t>(r.root.size());
+      }
+    });
+  }
+
+  /// A kept face as the face solver gave it.
+  FaceResult<S> result(const FaceRecord& r) const {
+    const std::span<const S> point = root(r);
+    return FaceResult<S>{{point.begin(), point.end()},
+                         r.roots,
+                         r.degree,
+                         r.certain,
+                         r.proven,
+                         r.withinRounding,
+                         r.degenerate};
   }
 
   /// The root of a kept face (n coordinates; empty when it has none).
@@ -331,6 +382,11 @@ class FaceStore {
     std::int32_t count = 0;
   };
   static bool byKind(const FaceRecord& r, std::uint32_t kind) { return r.kind < kind; }
+  /// The record of face `kind` solved as `r`, its root at `root` in the pool (-1: none).
+  static FaceRecord record(std::uint32_t kind, const FaceResult<S>& r, std::int64_t root) {
+    return FaceRecord{root,     r.degenerate, kind,     r.roots,
+                      r.degree, r.certain,    r.proven, r.withinRounding};
+  }
   int n_;
   std::vector<Block> blocks_;  ///< per leaf
   std::vector<FaceRecord> records_;
@@ -663,42 +719,37 @@ class AdaptiveCrossing {
   /// One pass over the minimal m-faces of the active leaves: the polygons of the crossed ones
   /// (excluded base cells around a crossed face become touch leaves, walked in turn) and the
   /// leaves next to a face whose crossings are not proven. Returns the degenerate crossings.
-  /// The faces are solved ahead, in parallel (prefetchFaces); the walk itself is sequential.
+  /// The leaves go in windows: a window's faces are solved in parallel (startWindow), and while
+  /// the walk takes one window's answers in leaf order from its slots, the faces it solved are
+  /// kept and the next window is solved beside it. The tasks write nothing the walk reads but
+  /// the slots of the window walked next, and the walk defers the touch leaves it adds to the
+  /// tree until they are done (finishWindow), so nothing depends on the thread count.
   std::int64_t crossFaces() {
     polygons_.clear();
     rootPoints_.clear();
     unprovenFaces_.clear();
     unprovenOf_.clear();
     unprovenOfEmpty_.clear();
-    std::int64_t degenerate = 0;
-    std::vector<std::int32_t> corner(n_), ci;
-    std::array<Occupant, 4> around;
     touchLeaves_.clear();
-    for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
-      if (!tree_.active(c)) continue;
-      // The next window of leaves (the touch leaves added so far among them).
-      if (c >= prefetchEnd_) prefetchFaces(c);
-      grow();
-      bool ready = false;  // patches_ are c's (then bandEmpty_[c] is set too)
-      if (empty_[c] < 0) empty_[c] = restrictOnce(c, ready) ? 1 : 0;
-      if (empty_[c] == 1) continue;  // no level set between M and M_c meets it
-      const int level = tree_.level(c);
-      // A copy: touch leaves added below may move the tree's index storage.
-      ci.assign(tree_.index(c).begin(), tree_.index(c).end());
-      const LeafFaces* known = prefetchedOf(c);
-      if (!known) ownedFaces(c, owned_);
-      std::size_t next = 0;  // the prefetched faces come in the order of the owned ones
-      for (const OwnedFace& f : known ? known->owned : owned_) {
-        faceAround(ci, f, corner, around);
-        const std::uint32_t kind = faceKind(f.a, f.side);
-        const FaceRecord* r = faces_.find(c, kind);
-        if (!r)
-          r = faces_.add(c, kind, faceResult(c, f.a, f.side, faceKey(c, f.a, f.side), ready, next));
-        degenerate += addFace(*r, around, level, corner, fixedAxes_[f.a]);
+    std::int64_t degenerate = 0;
+    Window* now = &windows_[0];
+    Window* next = &windows_[1];
+    std::int32_t from = 0;
+    bool ready = false;  // whether `now` holds the window at `from`, solved
+    while (true) {
+      if (!ready) {
+        startWindow(from, *now, nullptr);
+        finishWindow();
       }
+      if (now->from == now->end) return degenerate;  // every leaf walked and its faces kept
+      startWindow(now->end, *next, now);
+      degenerate += walkWindow(*now);
+      finishWindow();
+      std::swap(now, next);
+      // An empty next window: the tree ended there when it started (touch leaves may follow).
+      ready = now->from < now->end;
+      from = now->from;
     }
-    clearPrefetched();
-    return degenerate;
   }
 
   /// A minimal m-face a leaf owns: its kind (a, side) and the leaves around it (kLeaf; any
@@ -799,91 +850,122 @@ class AdaptiveCrossing {
     return static_cast<std::uint32_t>(a << k_) + static_cast<std::uint32_t>(side);
   }
 
-  /// The key of face (a, side) of leaf c among all faces (prefetchLeaf's results).
-  std::uint64_t faceKey(std::int32_t c, std::size_t a, int side) const {
-    const auto faceTypes = static_cast<std::uint64_t>(fixedAxes_.size()) << k_;
-    return static_cast<std::uint64_t>(c) * faceTypes + (a << k_) + std::uint64_t(side);
-  }
-
-  /// restrictTo(c), or its answer from prefetchFaces (then patches_ are not c's and `ready`
-  /// stays false).
-  bool restrictOnce(std::int32_t c, bool& ready) {
-    if (const LeafFaces* known = prefetchedOf(c); known && known->empty >= 0) {
-      bandEmpty_.resize(tree_.size(), 0);
-      bandEmpty_[c] = known->band;
-      return known->empty == 1;
-    }
-    ready = true;
-    return restrictTo(c);
-  }
-
-  /// The solution of face (a, side) of leaf c: prefetchFaces's, or solved now. prefetchLeaf
-  /// solved the faces crossFaces asks for, in its order (both skip the faces kept already, and
-  /// only c's own walk keeps faces of c), so they are taken from `next` on, with no search.
-  FaceResult<S> faceResult(std::int32_t c, std::size_t a, int side, std::uint64_t key, bool& ready,
-                           std::size_t& next) {
-    if (LeafFaces* known = prefetchedOf(c)) {
-      auto& faces = known->faces;
-      if (next < faces.size() && faces[next].first == key) return std::move(faces[next++].second);
-    }
-    const RootForms& rf = rootForms(tree_.index(c), tree_.level(c));
-    const auto patches = [&]() -> const std::vector<Bernstein<S>>& {
-      if (!ready) restrictTo(c);
-      ready = true;
-      return patches_;
-    };
-    return solveFace(c, fixedAxes_[a], side, patches, rf.margins);
+  /// Whether a face leaves no trace in the walk: not crossed, and addFace flags none of its
+  /// leaves (proven, decided, clear of rounding and of the face's boundary).
+  template <class Face>
+  static bool quiet(const Face& r) {
+    return r.degree == 0 && r.roots <= 1 && r.proven && r.certain && !r.withinRounding &&
+           r.degenerate == 0;
   }
 
   /// What prefetchLeaf found for one leaf ahead of crossFaces.
   struct LeafFaces {
     std::int8_t empty = -1;  ///< restrictLeaf's answer (-1: not restricted)
     std::int8_t band = 0;    ///< and its band
-    std::vector<std::pair<std::uint64_t, FaceResult<S>>> faces;  ///< by key
-    std::vector<OwnedFace> owned;  ///< ownedFaces (when the leaf may be crossed)
+    std::vector<std::pair<std::uint32_t, FaceResult<S>>> faces;  ///< new ones, by kind
+    std::vector<FaceResult<S>> kept;  ///< copies of the kept faces (earlier rounds) in `visit`
+    std::vector<OwnedFace> owned;     ///< ownedFaces (when the leaf may be crossed)
+    /// The owned faces that are not quiet: (index in `owned`, the face: i >= 0 in `faces`, else
+    /// -1 - i in `kept`), so that the walk reads nothing but the slot.
+    std::vector<std::pair<std::uint32_t, std::int32_t>> visit;
+
+    const FaceResult<S>& face(std::int32_t i) const {
+      return i >= 0 ? faces[std::size_t(i)].second : kept[std::size_t(-1 - i)];
+    }
+
+    /// Empty again, keeping the storage.
+    void clear() {
+      empty = -1;
+      band = 0;
+      faces.clear();
+      kept.clear();
+      owned.clear();
+      visit.clear();
+    }
   };
 
-  /// The parallel part of crossFaces: each active leaf that may be crossed is a task that
-  /// restricts it and solves the faces it owns that faces_ does not hold yet, writing only its
-  /// slot of prefetched_ (reads only otherwise), for a window of kPrefetchWindow leaves from
-  /// `from` on (so that the slots' memory stays bounded; the touch leaves the walk adds come
-  /// in the last windows). crossFaces then walks the leaves in order as
-  /// before and takes these answers instead of computing them, so nothing it does depends on
-  /// the order in which the tasks ran.
-  void prefetchFaces(std::int32_t from) {
-    clearPrefetched();  // the previous window's slots are spent
+  /// Whether leaf c is empty by prefetchLeaf's answer, which it gives whenever empty_[c] is
+  /// unknown (bandEmpty_[c] is set too).
+  bool emptyOf(std::int32_t c, const LeafFaces& known) {
+    bandEmpty_.resize(leafCount(), 0);
+    bandEmpty_[c] = known.band;
+    return known.empty == 1;
+  }
+
+  /// A window of kWindowLeaves leaves of crossFaces and what its tasks found.
+  struct Window {
+    std::int32_t from = 0, end = 0;
+    std::vector<std::int32_t> leaves;  ///< the active leaves that may be crossed
+    std::vector<std::int8_t> prior;    ///< and their empty_ when the window started
+    std::vector<const RootForms*> forms;
+    std::vector<LeafFaces> slots;  ///< per leaf from `from` on
+    std::size_t used = 0;          ///< the slots holding answers of the window's last use
+  };
+
+  /// Starts, beside the caller, keeping the faces that the window `keep` (if any) solved, then
+  /// solving the window of leaves from `from` on (up to kWindowLeaves, so that the slots'
+  /// memory stays bounded): each active leaf that may be crossed is a task that restricts it
+  /// and solves the faces it owns that faces_ does not hold yet, writing only its slot
+  /// (prefetchLeaf). Meanwhile the caller may walk `keep`, which reads only its slots.
+  void startWindow(std::int32_t from, Window& w, const Window* keep) {
     grow();
-    const auto end = std::min(static_cast<std::int32_t>(tree_.size()), from + kPrefetchWindow);
-    std::vector<std::int32_t> leaves;
-    for (std::int32_t c = from; c < end; ++c) {
-      if (tree_.active(c) && empty_[c] != 1) leaves.push_back(c);
+    w.from = from;
+    w.end = std::min(static_cast<std::int32_t>(tree_.size()), from + kWindowLeaves);
+    w.leaves.clear();
+    w.prior.clear();
+    for (std::int32_t c = from; c < w.end; ++c) {
+      if (!tree_.active(c) || empty_[c] == 1) continue;
+      w.leaves.push_back(c);
+      w.prior.push_back(empty_[c]);
     }
-    const std::vector<const RootForms*> forms = rootFormsOf(leaves);
-    prefetched_.resize(kPrefetchWindow);
-    prefetchFrom_ = from;
-    prefetchEnd_ = end;
-    parallelFor(leaves.size(), [&](std::size_t i) {
-      prefetchLeaf(leaves[i], *forms[i], prefetched_[std::size_t(leaves[i] - from)]);
+    w.forms = rootFormsOf(w.leaves);
+    w.slots.resize(kWindowLeaves);
+    beside_.start([this, &w, keep] {
+      if (keep) keepFaces(*keep);
+      // The slots' answers from the window's last use first (they hold the faces' roots).
+      parallelFor(std::exchange(w.used, std::size_t(w.end - w.from)),
+                  [&](std::size_t i) { w.slots[i].clear(); });
+      parallelFor(w.leaves.size(), [&](std::size_t i) {
+        prefetchLeaf(w.leaves[i], w.prior[i], *w.forms[i],
+                     w.slots[std::size_t(w.leaves[i] - w.from)]);
+      });
     });
   }
 
-  /// Leaf c's slot of prefetched_, or null when c is not in the current window.
-  LeafFaces* prefetchedOf(std::int32_t c) {
-    if (c < prefetchFrom_ || c >= prefetchEnd_) return nullptr;
-    return &prefetched_[std::size_t(c - prefetchFrom_)];
+  /// Waits for the window solved beside the walk and adds the touch leaves the walk deferred.
+  void finishWindow() {
+    beside_.wait();
+    addDeferredLeaves();
   }
 
-  /// Empties the current window's slots (in parallel: they hold the faces' roots), keeping
-  /// their storage for the next window.
-  void clearPrefetched() {
-    parallelFor(std::size_t(prefetchEnd_ - prefetchFrom_), [&](std::size_t i) {
-      LeafFaces& slot = prefetched_[i];
-      slot.empty = -1;
-      slot.band = 0;
-      slot.faces.clear();
-      slot.owned.clear();
-    });
-    prefetchFrom_ = prefetchEnd_ = 0;
+  /// Keeps the new faces of a solved window in faces_.
+  void keepFaces(const Window& w) {
+    faces_.addBlocks(
+        w.leaves, [&](std::size_t i) -> const auto& {
+          return w.slots[std::size_t(w.leaves[i] - w.from)].faces;
+        });
+  }
+
+  /// The walk over one solved window's leaves in order: the faces that leave a trace.
+  std::int64_t walkWindow(const Window& w) {
+    std::int64_t degenerate = 0;
+    std::vector<std::int32_t> corner(n_), ci;
+    std::array<Occupant, 4> around;
+    for (std::int32_t c = w.from; c < w.end; ++c) {
+      if (!tree_.active(c)) continue;
+      grow();
+      const LeafFaces& known = w.slots[std::size_t(c - w.from)];
+      if (empty_[c] < 0) empty_[c] = emptyOf(c, known) ? 1 : 0;
+      if (empty_[c] == 1) continue;  // no level set between M and M_c meets it
+      const int level = tree_.level(c);
+      ci.assign(tree_.index(c).begin(), tree_.index(c).end());
+      for (const auto& [i, face] : known.visit) {
+        const OwnedFace& f = known.owned[i];
+        faceAround(ci, f, corner, around);
+        degenerate += addFace(known.face(face), around, level, corner, fixedAxes_[f.a]);
+      }
+    }
+    return degenerate;
   }
 
   /// A task's patches: per thread in double (restrictLeaf then allocates nothing per leaf),
@@ -897,8 +979,8 @@ class AdaptiveCrossing {
     }
   }
 
-  /// One task of prefetchFaces.
-  void prefetchLeaf(std::int32_t c, const RootForms& rf, LeafFaces& out) const {
+  /// One task of startWindow: leaf c, whose empty_ was `prior` when its window started.
+  void prefetchLeaf(std::int32_t c, std::int8_t prior, const RootForms& rf, LeafFaces& out) const {
     std::vector<Bernstein<S>> own;
     std::vector<Bernstein<S>>& patches = leafScratch(own);
     bool restricted = false;
@@ -918,7 +1000,7 @@ class AdaptiveCrossing {
       buildLeafModel(threadEvaluators(in_.system), leafBox(c), std::span<const S>(level_), model);
       modelled = true;
     };
-    if (empty_[c] < 0) {
+    if (prior < 0) {
       // A leaf where every F_i - c_i provably takes both signs is not empty by its Bernstein
       // forms either: its patches are restricted only if a face needs them.
       if (m_ > 1 && byEvaluation_) {
@@ -927,16 +1009,23 @@ class AdaptiveCrossing {
       }
       if (out.empty < 0) prepare();
     }
-    if ((empty_[c] < 0 ? out.empty : empty_[c]) == 1) return;
+    if ((prior < 0 ? out.empty : prior) == 1) return;
     ownedFaces(c, out.owned);
     // The Krawczyk preconditioners of the faces' axis choices, each built on first use.
     thread_local std::vector<FacePreconditioner<S>> pre;
     thread_local std::vector<std::uint8_t> built;
     if (pre.size() < fixedAxes_.size()) pre.resize(fixedAxes_.size());
     built.assign(fixedAxes_.size(), 0);
-    for (const OwnedFace& f : out.owned) {
-      const std::uint64_t key = faceKey(c, f.a, f.side);
-      if (faces_.find(c, faceKind(f.a, f.side))) continue;
+    for (std::size_t i = 0; i < out.owned.size(); ++i) {
+      const OwnedFace& f = out.owned[i];
+      const std::uint32_t kind = faceKind(f.a, f.side);
+      if (const FaceRecord* kept = faces_.find(c, kind)) {
+        if (quiet(*kept)) continue;
+        out.kept.push_back(faces_.result(*kept));
+        out.visit.emplace_back(static_cast<std::uint32_t>(i),
+                               -static_cast<std::int32_t>(out.kept.size()));
+        continue;
+      }
       const auto restricted = [&]() -> const std::vector<Bernstein<S>>& {
         prepare();
         return patches;
@@ -946,9 +1035,12 @@ class AdaptiveCrossing {
         buildFacePreconditioner(model, std::span<const int>(fixedAxes_[f.a].data(), k_), pre[f.a]);
         built[f.a] = 1;
       }
-      out.faces.emplace_back(
-          key, solveFace(c, fixedAxes_[f.a], f.side, restricted, rf.margins,
-                         modelled ? &model : nullptr, modelled ? &pre[f.a] : nullptr));
+      FaceResult<S> r = solveFace(c, fixedAxes_[f.a], f.side, restricted, rf.margins,
+                                  modelled ? &model : nullptr, modelled ? &pre[f.a] : nullptr);
+      if (!quiet(r))
+        out.visit.emplace_back(static_cast<std::uint32_t>(i),
+                               static_cast<std::int32_t>(out.faces.size()));
+      out.faces.emplace_back(kind, std::move(r));
     }
   }
 
@@ -992,7 +1084,7 @@ class AdaptiveCrossing {
 
   /// Records a solved face: flags its leaves when the face is not proven, and adds its
   /// polygon (|degree| copies) when it is crossed. Returns its degenerate crossings.
-  std::int64_t addFace(const FaceRecord& r, std::array<Occupant, 4>& around, int level,
+  std::int64_t addFace(const FaceResult<S>& r, std::array<Occupant, 4>& around, int level,
                        const std::vector<std::int32_t>& corner, const std::array<int, 2>& axes) {
     const int quadrants = 1 << k_;
     const bool unproven = !r.proven || r.roots > 1 || std::abs(r.degree) > 1 || r.degenerate;
@@ -1008,7 +1100,7 @@ class AdaptiveCrossing {
       if (singular) singular_[around[q].leaf] = 1;
       if (unproven)
         setTrouble(around[q].leaf, r.roots > 0
-                                       ? faces_.root(r)
+                                       ? std::span<const S>(r.root)
                                        : std::span<const S>(faceCentre(level, corner, axes)));
     }
     if (r.degree == 0) {
@@ -1020,12 +1112,8 @@ class AdaptiveCrossing {
       std::int64_t node = 0;
       if (around[q].kind == Occ::kEmpty) {
         // A cell the level set F = c enters where M only touches it: a touch leaf.
-        std::vector<std::int32_t> index(n_);
-        grid_.unpack(around[q].key, index);
         around[q].kind = Occ::kLeaf;
-        around[q].leaf = tree_.addLeaf(grid_.depth, index, false);
-        touchLeaves_.insert(around[q].key, around[q].leaf);
-        grow();
+        around[q].leaf = deferTouchLeaf(around[q].key);
         if (unproven) unproven_[around[q].leaf] = 1;
         if (singular) singular_[around[q].leaf] = 1;
       }
@@ -1041,11 +1129,34 @@ class AdaptiveCrossing {
     if (p.size > 1 && p.node[p.size - 1] == p.node[0]) --p.size;
     if (unproven) recordUnproven(around, FaceRef{level, corner, axes});
     p.root = static_cast<std::int32_t>(rootPoints_.size() / n_);
-    const std::span<const S> root = faces_.root(r);
-    rootPoints_.insert(rootPoints_.end(), root.begin(), root.end());
+    rootPoints_.insert(rootPoints_.end(), r.root.begin(), r.root.end());
     for (int copy = 0; copy < std::abs(r.degree); ++copy) polygons_.push_back(p);
     return r.degenerate;
   }
+
+  /// A touch leaf at the excluded base cell `key`: its number now, its place in the tree once
+  /// the window solved beside the walk is done (addDeferredLeaves), so that the tasks never
+  /// see the tree change.
+  std::int32_t deferTouchLeaf(CellKey key) {
+    const auto leaf = static_cast<std::int32_t>(leafCount());
+    deferred_.push_back(key);
+    touchLeaves_.insert(key, leaf);
+    grow();
+    return leaf;
+  }
+
+  /// Adds the deferred touch leaves to the tree, in order: they get the numbers they were given.
+  void addDeferredLeaves() {
+    std::vector<std::int32_t> index(n_);
+    for (const CellKey key : deferred_) {
+      grid_.unpack(key, index);
+      tree_.addLeaf(grid_.depth, index, false);
+    }
+    deferred_.clear();
+  }
+
+  /// The leaves of the tree and the deferred touch leaves.
+  std::size_t leafCount() const { return tree_.size() + deferred_.size(); }
 
   /// The centre of the face of `level` with lower corner `corner` and fixed axes `axes`.
   std::vector<S> faceCentre(int level, const std::vector<std::int32_t>& corner,
@@ -1064,7 +1175,7 @@ class AdaptiveCrossing {
     const auto f = static_cast<std::int32_t>(unprovenFaces_.size());
     for (int q = 0; q < (1 << k_); ++q) {
       if (around[q].kind == Occ::kLeaf) {
-        unprovenOf_.resize(tree_.size());
+        unprovenOf_.resize(leafCount());
         unprovenOf_[around[q].leaf].push_back(f);
       } else if (around[q].kind == Occ::kEmpty) {
         unprovenOfEmpty_[around[q].key].push_back(f);
@@ -1131,7 +1242,7 @@ class AdaptiveCrossing {
 
   /// Per-leaf arrays follow the tree's growth.
   void grow() {
-    const std::size_t size = tree_.size();
+    const std::size_t size = leafCount();
     if (empty_.size() >= size) return;
     trouble_.resize(size * n_, S(0));
     hasTrouble_.resize(size, 0);
@@ -1610,7 +1721,7 @@ class AdaptiveCrossing {
     box.hi = cellBox(tree_.grid(level), domain_, hi).hi;
     const RootForms& rf = rootForms(lo, level);
     margins_ = rf.margins;
-    patches_.resize(m_);  // restrictTo may not have run (prefetchFaces, certifyLeaf)
+    patches_.resize(m_);  // restrictTo may not have run (startWindow, certifyLeaf)
     for (int i = 0; i < m_; ++i) patches_[i] = (*rf.forms)[i].restrict(box);
     if (!patchesGraph() && !intervalEmpty(box, true)) return false;
     if (k_ == 2) {
@@ -2164,12 +2275,12 @@ class AdaptiveCrossing {
   std::vector<std::int8_t> empty_, bandEmpty_;
   std::vector<std::uint8_t> unproven_, stuck_, singular_;
   std::vector<std::int8_t> graph_, faceGraph_;
-  std::vector<LeafFaces> prefetched_;  ///< prefetchFaces, per leaf of the current window
-  std::vector<OwnedFace> owned_;       ///< crossFaces's ownedFaces of a leaf not prefetched
   FlatMap<CellKey, std::int32_t> touchLeaves_;  ///< the touch leaves of one crossFaces, by base key
-  std::int32_t prefetchFrom_ = 0, prefetchEnd_ = 0;  ///< the leaves prefetched_ holds
-  /// Leaves per window of prefetchFaces: enough tasks for many threads, a few MB of slots.
-  static constexpr std::int32_t kPrefetchWindow = 4096;
+  std::array<Window, 2> windows_;  ///< crossFaces's: the one walked, the one solved beside
+  TaskBeside beside_;
+  std::vector<CellKey> deferred_;  ///< deferTouchLeaf's, until addDeferredLeaves
+  /// Leaves per window of crossFaces: enough tasks for many threads, a few MB of slots.
+  static constexpr std::int32_t kWindowLeaves = 4096;
   std::vector<Failure> failure_;
   std::vector<S> trouble_;  ///< n per leaf: where its certificate failed (setTrouble)
   std::vector<std::uint8_t> hasTrouble_;
