@@ -11,6 +11,7 @@
 #include <optional>
 #include <random>
 #include <regex>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -106,6 +107,14 @@ TEST_CASE("threads: refinement, certified and not, outputs identical with 1, 2 a
   sameWhateverThreads("genus2.toml", "--depth 5 --max-depth 5");
 }
 
+TEST_CASE("threads: touch leaves added while the next window is solved, outputs identical",
+          "[threads]") {
+  // The torus in R^5 at depth 5 has about 11,700 leaves (three windows of the crossing walk),
+  // and the walk of the last windows adds touch leaves (M meets excluded base cells at a face):
+  // the walk defers them until the window solved beside it is done (docs/performance.md).
+  sameWhateverThreads("torus-r5.toml", "--depth 5");
+}
+
 TEST_CASE("threads: MPFR at 200 bits, outputs identical with 1, 2 and 3 threads", "[threads]") {
   sameWhateverThreads("two-circles.toml", "--depth 5 --scalar mpfr --precision 200");
   sameWhateverThreads("clifford-torus.toml", "--depth 3 --scalar mpfr --precision 200");
@@ -185,6 +194,56 @@ TEST_CASE("threads: parallelSort gives std::sort's order on 1, 2 and 3 threads",
       CHECK(sorted == expected);
     }
   }
+}
+
+TEST_CASE("threads: a task beside the caller runs its loops, rethrows, and never outlives it",
+          "[threads]") {
+  for (const int threads : {1, 2, 3}) {
+    INFO("threads " << threads);
+    ndc::withThreads(threads, [&] {
+      // The task's parallel loop fills its vector while the caller fills another.
+      std::vector<std::uint64_t> beside(100000), caller(100000);
+      ndc::TaskBeside task;
+      task.start(
+          [&] { ndc::parallelFor(beside.size(), [&](std::size_t i) { beside[i] = i * i; }); });
+      for (std::size_t i = 0; i < caller.size(); ++i) caller[i] = i * i;
+      task.wait();
+      CHECK(beside == caller);
+      // Its exception reaches wait(), and the task can start again afterwards.
+      task.start([] { throw std::runtime_error("from the task"); });
+      CHECK_THROWS_WITH(task.wait(), "from the task");
+      int runs = 0;
+      task.start([&] { ++runs; });
+      task.wait();
+      CHECK(runs == 1);
+      // An exception in the caller while the task runs: the destructor waits for it.
+      std::vector<int> done(64, 0);
+      CHECK_THROWS_AS(
+          [&] {
+            ndc::TaskBeside running;
+            running.start(
+                [&] { ndc::parallelFor(done.size(), [&](std::size_t i) { done[i] = 1; }); });
+            throw std::logic_error("from the caller");
+          }(),
+          std::logic_error);
+    });
+  }
+}
+
+TEST_CASE("threads: more threads than the hardware has run as asked, without a warning",
+          "[threads][cli]") {
+  ndc::test::ScratchDir scratch("threads-over");
+  const int threads = static_cast<int>(std::thread::hardware_concurrency()) + 2;
+  const fs::path file = fs::path(ndc::test::sourceDir()) / "experiments/problems/circle.toml";
+  const auto run =
+      ndc::test::runNdcontour("solve " + quoted(file.string()) + " --depth 4 --json --threads " +
+                                  std::to_string(threads) + " --out out",
+                              scratch.path());
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  CHECK(run.err.find("TBB") == std::string::npos);  // oneTBB's limit was raised, not hit
+  // oneTBB has all of them: the arena reports its concurrency.
+  ndc::withThreads(threads, [&] { CHECK(tbb::this_task_arena::max_concurrency() == threads); });
 }
 
 TEST_CASE("threads: --threads takes an integer from 1 to 4096, else exit 2 with one line",

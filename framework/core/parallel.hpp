@@ -8,6 +8,7 @@
 #pragma once
 
 #include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -144,7 +145,13 @@ T& threadScratch(std::optional<T>& fresh) {
 /// every parallelFor inside it uses at most that many; returns what `f` returns.
 template <class F>
 decltype(auto) withThreads(int threads, F&& f) {
-  tbb::task_arena arena(effectiveThreads(threads));
+  const int count = effectiveThreads(threads);
+  // More threads than oneTBB's default (the hardware's) need its limit raised, or the arena
+  // gets fewer workers (and oneTBB prints a warning).
+  std::optional<tbb::global_control> limit;
+  if (count > tbb::info::default_concurrency())
+    limit.emplace(tbb::global_control::max_allowed_parallelism, std::size_t(count));
+  tbb::task_arena arena(count);
   return arena.execute(std::forward<F>(f));
 }
 
