@@ -258,18 +258,19 @@ struct FaceResult {
 
 /// A solved face as FaceStore keeps it: a FaceResult whose root lies in the store's pool.
 struct FaceRecord {
-  std::int64_t root = -1;       ///< offset of the first root's coordinates in the pool, or -1
+  std::int64_t root = -1;  ///< offset of the first root's coordinates in its chunk's pool, or -1
   std::int64_t degenerate = 0;  ///< as FaceResult
   std::uint32_t kind = 0;       ///< which face of its leaf (AdaptiveCrossing::faceKind)
   int roots = 0, degree = 0;
   bool certain = true, proven = true, withinRounding = false;
 };
 
-/// The solved faces of every leaf, kept across the refinement's rounds. The walk solves the
-/// faces a leaf owns one after the other, so each leaf's records form one block of a flat
-/// array, sorted by kind: keeping a face inserts it into the last block (nothing is allocated
-/// per face, nothing is hashed), and finding one is a binary search of its leaf's block (up to
-/// 4 C(n, 2) records: 60 in R^6).
+/// The solved faces of every leaf, kept across the refinement's rounds. A leaf's faces are
+/// solved together (one task of a window), so its records form one block, sorted by kind:
+/// finding one is a binary search of its leaf's block (up to 4 C(n, 2) records: 60 in R^6).
+/// Each window's blocks go into a chunk of their own, sized exactly (nothing is allocated per
+/// face, nothing is hashed, and no growing array is copied), with the roots in the chunk's pool.
+/// A leaf that gets new faces in a later round moves its block to the first chunk, which grows.
 template <class S>
 class FaceStore {
  public:
@@ -277,48 +278,72 @@ class FaceStore {
 
   void clear() {
     blocks_.clear();
-    records_.clear();
-    roots_.clear();
+    chunks_.assign(1, Chunk{});
   }
 
-  /// Face `kind` of `leaf`, or null.
+  /// Face `kind` of `leaf`, or null. The pointer stays valid until the next add.
   const FaceRecord* find(std::int32_t leaf, std::uint32_t kind) const {
     if (std::size_t(leaf) >= blocks_.size()) return nullptr;
     const Block& b = blocks_[std::size_t(leaf)];
-    const auto first = records_.begin() + b.first, last = first + b.count;
+    if (b.count == 0) return nullptr;
+    const std::vector<FaceRecord>& records = chunks_[std::size_t(b.chunk)].records;
+    const auto first = records.begin() + b.first, last = first + b.count;
     const auto it = std::lower_bound(first, last, kind, byKind);
     return it != last && it->kind == kind ? &*it : nullptr;
   }
 
-  /// Keeps face `kind` of `leaf` (not kept yet). The pointer stays valid until the next add.
-  const FaceRecord* add(std::int32_t leaf, std::uint32_t kind, const FaceResult<S>& r) {
+  /// Face `kind` of `leaf` (kept) as the face solver gave it.
+  FaceResult<S> result(std::int32_t leaf, const FaceRecord& r) const {
+    std::vector<S> root;
+    if (r.root >= 0) {
+      const auto& pool = chunks_[std::size_t(blocks_[std::size_t(leaf)].chunk)].roots;
+      root.assign(pool.begin() + r.root, pool.begin() + r.root + n_);
+    }
+    return FaceResult<S>{std::move(root), r.roots,          r.degree,    r.certain,
+                         r.proven,        r.withinRounding, r.degenerate};
+  }
+
+  /// Keeps face `kind` of `leaf` (not kept yet), in the first chunk.
+  void add(std::int32_t leaf, std::uint32_t kind, const FaceResult<S>& r) {
     if (std::size_t(leaf) >= blocks_.size()) blocks_.resize(std::size_t(leaf) + 1);
     Block& b = blocks_[std::size_t(leaf)];
-    const auto end = static_cast<std::int64_t>(records_.size());
-    if (b.count > 0 && b.first + b.count != end) {
-      // The leaf's block is not the last one (a face of an earlier round's leaf that it did
-      // not own then): move the block to the end, where it can grow (through a copy: a
-      // vector may not insert a range of itself).
-      const std::vector<FaceRecord> block(records_.begin() + b.first,
-                                          records_.begin() + b.first + b.count);
-      records_.insert(records_.end(), block.begin(), block.end());
+    Chunk& tail = chunks_.front();
+    const auto end = static_cast<std::int64_t>(tail.records.size());
+    if (b.count > 0 && (b.chunk != 0 || b.first + b.count != end)) {
+      // The leaf's block is elsewhere (a window's chunk, or not last): copy it, with its roots,
+      // to the end of the first chunk, where it can grow (through copies: a vector may not
+      // insert a range of itself).
+      const Chunk& from = chunks_[std::size_t(b.chunk)];
+      std::vector<FaceRecord> block(from.records.begin() + b.first,
+                                    from.records.begin() + b.first + b.count);
+      std::vector<S> roots;
+      for (FaceRecord& moved : block) {
+        if (moved.root < 0) continue;
+        const auto at = from.roots.begin() + moved.root;
+        moved.root = static_cast<std::int64_t>(tail.roots.size() + roots.size());
+        roots.insert(roots.end(), at, at + n_);
+      }
+      tail.records.insert(tail.records.end(), block.begin(), block.end());
+      tail.roots.insert(tail.roots.end(), roots.begin(), roots.end());
       b.first = end;
+      b.chunk = 0;
     } else if (b.count == 0) {
       b.first = end;
+      b.chunk = 0;
     }
-    FaceRecord kept = record(kind, r, r.root.empty() ? -1 : std::int64_t(roots_.size()));
-    roots_.insert(roots_.end(), r.root.begin(), r.root.end());
+    const FaceRecord kept = record(kind, r, r.root.empty() ? -1 : std::int64_t(tail.roots.size()));
+    tail.roots.insert(tail.roots.end(), r.root.begin(), r.root.end());
     // The block is the last one now: insert in kind order.
-    const auto at = std::lower_bound(records_.begin() + b.first, records_.end(), kind, byKind);
-    const auto it = records_.insert(at, kept);
+    const auto at =
+        std::lower_bound(tail.records.begin() + b.first, tail.records.end(), kind, byKind);
+    tail.records.insert(at, kept);
     ++b.count;
-    return &*it;
   }
 
   /// Keeps the faces a window of leaves solved: `solved(i)`, a range of (kind, FaceResult) in
   /// kind order, are the new faces of leaves[i] (ascending). A leaf with faces of an earlier
-  /// round takes add; the others' blocks are placed at the end by prefix sums and filled in
-  /// parallel, each task writing only its leaf's block.
+  /// round takes add; the others' blocks go into a new chunk, placed by prefix sums and filled
+  /// in parallel, each task writing only its leaf's block.
   template <class Solved>
   void addBlocks(std::span<const std::int32_t> leaves, const Solved& solved) {
     if (leaves.empty()) return;
@@ -329,68 +354,56 @@ class FaceStore {
       for (const auto& [kind, r] : solved(i)) add(leaves[i], kind, r);
     }
     // The fresh leaves' places: records and roots in leaf order.
+    const auto chunk = static_cast<std::int32_t>(chunks_.size());
     std::vector<std::int64_t> rootAt(leaves.size(), -1);
-    auto records = static_cast<std::int64_t>(records_.size());
-    std::size_t roots = roots_.size();
+    std::int64_t records = 0;
+    std::size_t roots = 0;
     std::vector<std::size_t> fresh;
     for (std::size_t i = 0; i < leaves.size(); ++i) {
       Block& b = blocks_[std::size_t(leaves[i])];
       const auto& list = solved(i);
       if (b.count > 0 || list.empty()) continue;
       fresh.push_back(i);
-      b.first = records;
-      b.count = static_cast<std::int32_t>(list.size());
+      b = Block{chunk, static_cast<std::int32_t>(list.size()), records};
       records += b.count;
       rootAt[i] = static_cast<std::int64_t>(roots);
       for (const auto& entry : list) roots += entry.second.root.size();
     }
-    records_.resize(std::size_t(records));
-    roots_.resize(roots);
+    if (fresh.empty()) return;
+    Chunk& c = chunks_.emplace_back();
+    c.records.resize(std::size_t(records));
+    c.roots.resize(roots);
     parallelFor(fresh.size(), [&](std::size_t f) {
       const std::size_t i = fresh[f];
-      auto out = records_.begin() + blocks_[std::size_t(leaves[i])].first;
+      auto out = c.records.begin() + blocks_[std::size_t(leaves[i])].first;
       std::int64_t root = rootAt[i];
       for (const auto& [kind, r] : solved(i)) {
         *out++ = record(kind, r, r.root.empty() ? -1 : root);
-        std::copy(r.root.begin(), r.root.end(), roots_.begin() + root);
+        std::copy(r.root.begin(), r.root.end(), c.roots.begin() + root);
         root += static_cast<std::int64_t>(r.root.size());
       }
     });
   }
 
-  /// A kept face as the face solver gave it.
-  FaceResult<S> result(const FaceRecord& r) const {
-    const std::span<const S> point = root(r);
-    return FaceResult<S>{{point.begin(), point.end()},
-                         r.roots,
-                         r.degree,
-                         r.certain,
-                         r.proven,
-                         r.withinRounding,
-                         r.degenerate};
-  }
-
-  /// The root of a kept face (n coordinates; empty when it has none).
-  std::span<const S> root(const FaceRecord& r) const {
-    if (r.root < 0) return {};
-    return std::span<const S>(roots_).subspan(std::size_t(r.root), std::size_t(n_));
-  }
-
  private:
   struct Block {
-    std::int64_t first = 0;
+    std::int32_t chunk = 0;
     std::int32_t count = 0;
+    std::int64_t first = 0;
+  };
+  struct Chunk {
+    std::vector<FaceRecord> records;
+    std::vector<S> roots;
   };
   static bool byKind(const FaceRecord& r, std::uint32_t kind) { return r.kind < kind; }
-  /// The record of face `kind` solved as `r`, its root at `root` in the pool (-1: none).
+  /// The record of face `kind` solved as `r`, its root at `root` in its chunk's pool (-1: none).
   static FaceRecord record(std::uint32_t kind, const FaceResult<S>& r, std::int64_t root) {
     return FaceRecord{root,     r.degenerate, kind,     r.roots,
                       r.degree, r.certain,    r.proven, r.withinRounding};
   }
   int n_;
-  std::vector<Block> blocks_;  ///< per leaf
-  std::vector<FaceRecord> records_;
-  std::vector<S> roots_;
+  std::vector<Block> blocks_;                          ///< per leaf
+  std::vector<Chunk> chunks_ = std::vector<Chunk>(1);  ///< the first grows (add); then per window
 };
 
 /// Why a leaf is not certified (docs/certificate.md); the names go to uncertified.csv.
@@ -1021,7 +1034,7 @@ class AdaptiveCrossing {
       const std::uint32_t kind = faceKind(f.a, f.side);
       if (const FaceRecord* kept = faces_.find(c, kind)) {
         if (quiet(*kept)) continue;
-        out.kept.push_back(faces_.result(*kept));
+        out.kept.push_back(faces_.result(c, *kept));
         out.visit.emplace_back(static_cast<std::uint32_t>(i),
                                -static_cast<std::int32_t>(out.kept.size()));
         continue;
@@ -2280,7 +2293,7 @@ class AdaptiveCrossing {
   TaskBeside beside_;
   std::vector<CellKey> deferred_;  ///< deferTouchLeaf's, until addDeferredLeaves
   /// Leaves per window of crossFaces: enough tasks for many threads, a few MB of slots.
-  static constexpr std::int32_t kWindowLeaves = 4096;
+  static constexpr std::int32_t kWindowLeaves = 2048;
   std::vector<Failure> failure_;
   std::vector<S> trouble_;  ///< n per leaf: where its certificate failed (setTrouble)
   std::vector<std::uint8_t> hasTrouble_;
