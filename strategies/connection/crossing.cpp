@@ -648,12 +648,13 @@ class AdaptiveCrossing {
   /// FaceSolver per thread, reset per call). For m >= 2 the face is first solved by evaluation of
   /// the programs (FaceSolver::solveByEvaluation); only a face that decides nothing so is solved on
   /// the Bernstein slices of the leaf's patches, which `patches()` returns (restrictLeaf, on first
-  /// use) with the margins `margins`.
-  template <class Patches>
+  /// use) with the margins `margins`. With the leaf's `model`, the face is first tried for
+  /// exclusion by it; `preconditioner()` gives the Krawczyk test's preconditioner of the face's
+  /// axes (or null), asked for only when the model's enclosure alone does not exclude the face.
+  template <class Patches, class Preconditioner>
   FaceResult<S> solveFace(std::int32_t leaf, const std::array<int, 2>& axes, int side,
-                          Patches&& patches, std::span<const S> margins,
-                          const LeafModel<S>* model = nullptr,
-                          const FacePreconditioner<S>* pre = nullptr) const {
+                          Patches&& patches, std::span<const S> margins, const LeafModel<S>* model,
+                          Preconditioner&& preconditioner) const {
     std::optional<FaceWork> fresh;
     FaceWork& w = threadScratch<S, FaceWork>(fresh);
     cellBoxInto(tree_.grid(tree_.level(leaf)), domain_, tree_.index(leaf), w.box);
@@ -680,10 +681,12 @@ class AdaptiveCrossing {
     FaceResult<S> r;
     // The leaf's affine model first: it excludes most faces without an evaluation on them.
     const std::span<const int> fixed(axes.data(), static_cast<std::size_t>(k_));
-    if (model && (faceExcluded(*model, box, fixed, side) ||
-                  (pre && faceKrawczykExcludes(*model, *pre, box, fixed, side)) ||
-                  faceMultipliersExclude(*model, box, fixed, side, kFaceMultiplierSteps))) {
-      return faceOutcome(std::move(r), w.roots, box, w.freeAxes, w.ends);
+    if (model) {
+      const FacePreconditioner<S>* pre = nullptr;
+      if (faceExcluded(*model, box, fixed, side) ||
+          ((pre = preconditioner()) && faceKrawczykExcludes(*model, *pre, box, fixed, side)) ||
+          faceMultipliersExclude(*model, box, fixed, side, kFaceMultiplierSteps))
+        return faceOutcome(std::move(r), w.roots, box, w.freeAxes, w.ends);
     }
     FaceSolver<S>& solver = w.solver;
     solver.reset(in_.system, maxFaceDepth_, std::span<const S>(level_), position_.slack);
@@ -877,10 +880,9 @@ class AdaptiveCrossing {
     std::int8_t band = 0;    ///< and its band
     std::vector<std::pair<std::uint32_t, FaceResult<S>>> faces;  ///< new ones, by kind
     std::vector<FaceResult<S>> kept;  ///< copies of the kept faces (earlier rounds) in `visit`
-    std::vector<OwnedFace> owned;     ///< ownedFaces (when the leaf may be crossed)
-    /// The owned faces that are not quiet: (index in `owned`, the face: i >= 0 in `faces`, else
-    /// -1 - i in `kept`), so that the walk reads nothing but the slot.
-    std::vector<std::pair<std::uint32_t, std::int32_t>> visit;
+    /// The owned faces that are not quiet, in the order of ownedFaces: (the face, its solution:
+    /// i >= 0 in `faces`, else -1 - i in `kept`), so that the walk reads nothing but the slot.
+    std::vector<std::pair<OwnedFace, std::int32_t>> visit;
 
     const FaceResult<S>& face(std::int32_t i) const {
       return i >= 0 ? faces[std::size_t(i)].second : kept[std::size_t(-1 - i)];
@@ -892,7 +894,6 @@ class AdaptiveCrossing {
       band = 0;
       faces.clear();
       kept.clear();
-      owned.clear();
       visit.clear();
     }
   };
@@ -972,8 +973,7 @@ class AdaptiveCrossing {
       if (empty_[c] == 1) continue;  // no level set between M and M_c meets it
       const int level = tree_.level(c);
       ci.assign(tree_.index(c).begin(), tree_.index(c).end());
-      for (const auto& [i, face] : known.visit) {
-        const OwnedFace& f = known.owned[i];
+      for (const auto& [f, face] : known.visit) {
         faceAround(ci, f, corner, around);
         degenerate += addFace(known.face(face), around, level, corner, fixedAxes_[f.a]);
       }
@@ -1023,20 +1023,21 @@ class AdaptiveCrossing {
       if (out.empty < 0) prepare();
     }
     if ((prior < 0 ? out.empty : prior) == 1) return;
-    ownedFaces(c, out.owned);
-    // The Krawczyk preconditioners of the faces' axis choices, each built on first use.
+    // The faces c owns, per thread: the slot keeps only those the walk visits.
+    thread_local std::vector<OwnedFace> owned;
+    ownedFaces(c, owned);
+    // The Krawczyk preconditioners of the faces' axis choices, each built when a face of that
+    // choice is the first that the model's enclosure alone does not exclude.
     thread_local std::vector<FacePreconditioner<S>> pre;
     thread_local std::vector<std::uint8_t> built;
     if (pre.size() < fixedAxes_.size()) pre.resize(fixedAxes_.size());
     built.assign(fixedAxes_.size(), 0);
-    for (std::size_t i = 0; i < out.owned.size(); ++i) {
-      const OwnedFace& f = out.owned[i];
+    for (const OwnedFace& f : owned) {
       const std::uint32_t kind = faceKind(f.a, f.side);
       if (const FaceRecord* kept = faces_.find(c, kind)) {
         if (quiet(*kept)) continue;
         out.kept.push_back(faces_.result(c, *kept));
-        out.visit.emplace_back(static_cast<std::uint32_t>(i),
-                               -static_cast<std::int32_t>(out.kept.size()));
+        out.visit.emplace_back(f, -static_cast<std::int32_t>(out.kept.size()));
         continue;
       }
       const auto restricted = [&]() -> const std::vector<Bernstein<S>>& {
@@ -1044,15 +1045,17 @@ class AdaptiveCrossing {
         return patches;
       };
       if (m_ > 1 && byEvaluation_) buildModel();
-      if (modelled && !built[f.a]) {
-        buildFacePreconditioner(model, std::span<const int>(fixedAxes_[f.a].data(), k_), pre[f.a]);
-        built[f.a] = 1;
-      }
+      const auto preconditioner = [&]() -> const FacePreconditioner<S>* {
+        if (!built[f.a]) {
+          buildFacePreconditioner(model, std::span<const int>(fixedAxes_[f.a].data(), k_),
+                                  pre[f.a]);
+          built[f.a] = 1;
+        }
+        return &pre[f.a];
+      };
       FaceResult<S> r = solveFace(c, fixedAxes_[f.a], f.side, restricted, rf.margins,
-                                  modelled ? &model : nullptr, modelled ? &pre[f.a] : nullptr);
-      if (!quiet(r))
-        out.visit.emplace_back(static_cast<std::uint32_t>(i),
-                               static_cast<std::int32_t>(out.faces.size()));
+                                  modelled ? &model : nullptr, preconditioner);
+      if (!quiet(r)) out.visit.emplace_back(f, static_cast<std::int32_t>(out.faces.size()));
       out.faces.emplace_back(kind, std::move(r));
     }
   }
