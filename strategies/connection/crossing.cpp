@@ -748,19 +748,20 @@ class AdaptiveCrossing {
     unprovenOfEmpty_.clear();
     touchLeaves_.clear();
     std::int64_t degenerate = 0;
+    TaskBeside beside;  // a local: an exception out of the walk never leaves the task running
     Window* now = &windows_[0];
     Window* next = &windows_[1];
     std::int32_t from = 0;
     bool ready = false;  // whether `now` holds the window at `from`, solved
     while (true) {
       if (!ready) {
-        startWindow(from, *now, nullptr);
-        finishWindow();
+        startWindow(beside, from, *now, nullptr);
+        finishWindow(beside);
       }
       if (now->from == now->end) return degenerate;  // every leaf walked and its faces kept
-      startWindow(now->end, *next, now);
+      startWindow(beside, now->end, *next, now);
       degenerate += walkWindow(*now);
-      finishWindow();
+      finishWindow(beside);
       std::swap(now, next);
       // An empty next window: the tree ended there when it started (touch leaves may follow).
       ready = now->from < now->end;
@@ -916,12 +917,12 @@ class AdaptiveCrossing {
     std::size_t used = 0;          ///< the slots holding answers of the window's last use
   };
 
-  /// Starts, beside the caller, keeping the faces that the window `keep` (if any) solved, then
+  /// Starts, as `beside`'s task, keeping the faces that the window `keep` (if any) solved, then
   /// solving the window of leaves from `from` on (up to kWindowLeaves, so that the slots'
   /// memory stays bounded): each active leaf that may be crossed is a task that restricts it
   /// and solves the faces it owns that faces_ does not hold yet, writing only its slot
   /// (prefetchLeaf). Meanwhile the caller may walk `keep`, which reads only its slots.
-  void startWindow(std::int32_t from, Window& w, const Window* keep) {
+  void startWindow(TaskBeside& beside, std::int32_t from, Window& w, const Window* keep) {
     grow();
     w.from = from;
     w.end = std::min(static_cast<std::int32_t>(tree_.size()), from + kWindowLeaves);
@@ -934,7 +935,7 @@ class AdaptiveCrossing {
     }
     w.forms = rootFormsOf(w.leaves);
     w.slots.resize(kWindowLeaves);
-    beside_.start([this, &w, keep] {
+    beside.start([this, &w, keep] {
       if (keep) keepFaces(*keep);
       // The slots' answers from the window's last use first (they hold the faces' roots).
       parallelFor(std::exchange(w.used, std::size_t(w.end - w.from)),
@@ -947,8 +948,8 @@ class AdaptiveCrossing {
   }
 
   /// Waits for the window solved beside the walk and adds the touch leaves the walk deferred.
-  void finishWindow() {
-    beside_.wait();
+  void finishWindow(TaskBeside& beside) {
+    beside.wait();
     addDeferredLeaves();
   }
 
@@ -2293,7 +2294,6 @@ class AdaptiveCrossing {
   std::vector<std::int8_t> graph_, faceGraph_;
   FlatMap<CellKey, std::int32_t> touchLeaves_;  ///< the touch leaves of one crossFaces, by base key
   std::array<Window, 2> windows_;  ///< crossFaces's: the one walked, the one solved beside
-  TaskBeside beside_;
   std::vector<CellKey> deferred_;  ///< deferTouchLeaf's, until addDeferredLeaves
   /// Leaves per window of crossFaces: enough tasks for many threads, a few MB of slots.
   static constexpr std::int32_t kWindowLeaves = 2048;
