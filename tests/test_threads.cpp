@@ -235,10 +235,10 @@ TEST_CASE("threads: more threads than the hardware has run as asked, without a w
   ndc::test::ScratchDir scratch("threads-over");
   const int threads = static_cast<int>(std::thread::hardware_concurrency()) + 2;
   const fs::path file = fs::path(ndc::test::sourceDir()) / "experiments/problems/circle.toml";
-  const auto run =
-      ndc::test::runNdcontour("solve " + quoted(file.string()) + " --depth 4 --json --threads " +
-                                  std::to_string(threads) + " --out out",
-                              scratch.path());
+  const auto run = ndc::test::runNdcontour(
+      "solve " + quoted(file.string()) + " --depth 4 --json --threads " + std::to_string(threads) +
+          " --out " + quoted((scratch.path() / "out").string()),
+      scratch.path());
   INFO(run.err);
   REQUIRE(run.status == 0);
   CHECK(run.err.find("TBB") == std::string::npos);  // oneTBB's limit was raised, not hit
