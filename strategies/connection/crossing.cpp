@@ -900,9 +900,8 @@ class AdaptiveCrossing {
   };
 
   /// Whether leaf c is empty by prefetchLeaf's answer, which it gives whenever empty_[c] is
-  /// unknown (bandEmpty_[c] is set too).
+  /// unknown (bandEmpty_[c] is set too; the caller has grown the per-leaf arrays).
   bool emptyOf(std::int32_t c, const LeafFaces& known) {
-    bandEmpty_.resize(leafCount(), 0);
     bandEmpty_[c] = known.band;
     return known.empty == 1;
   }
@@ -1023,7 +1022,8 @@ class AdaptiveCrossing {
       }
       if (out.empty < 0) prepare();
     }
-    if ((prior < 0 ? out.empty : prior) == 1) return;
+    // A prior emptiness is never 1 (startWindow skips those leaves).
+    if (out.empty == 1) return;
     // The faces c owns, per thread: the slot keeps only those the walk visits.
     thread_local std::vector<OwnedFace> owned;
     ownedFaces(c, owned);
