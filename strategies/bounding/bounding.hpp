@@ -13,6 +13,7 @@
 #include "framework/core/box.hpp"
 #include "framework/core/expression.hpp"
 #include "framework/core/interval.hpp"
+#include "framework/core/linearised_system.hpp"
 #include "framework/core/midrad.hpp"
 #include "framework/core/multipliers.hpp"
 #include "framework/core/problem.hpp"
@@ -207,51 +208,17 @@ class LinearizedBounding final {
   /// The mean-value test of each equation without a patch, affine or not, after steps 1 and 2
   /// (for those rows); true when one excludes 0.
   bool meanValueExcludes(bool affine) const;
-  /// Steps 3 to 7 after steps 1 and 2 (`hh` from step 1); true when the box is discarded.
-  bool linearisedSystemExcludes(const S& hh) const;
   // The steps of linearizationExcludes (numbered as in the class comment), on the scratch
   // buffers below.
-  /// 1: centre c_ and half-widths h_ of `box`; returns |h|_2^2 (rounded up).
+  /// 1: centre c_ and half-widths (system_.h) of `box`; returns |h|_2^2 (rounded up).
   S centreAndHalfWidths(const Box<S>& box) const;
-  /// 2: J_c (jac_), mid F(c) (mu_) and the radii rho_; false when an enclosure is not finite.
+  /// 2: J_c, mid F(c) and the radii rho into system_; false when an enclosure is not finite.
   bool linearise() const;
   /// Step 2 for the affine rows only, or for the others only.
   bool lineariseRows(bool affine) const;
   /// For a semidefinite quadratic (`curvature`), the Taylor remainder [-r, r] made one-sided:
   /// `r` becomes its half-width and `shift` its centre.
   void oneSided(const Curvature& curvature, S& r, S& shift) const;
-  /// 3: Householder QR of J_c^T into w_, beta_, diag_ and Q (q_); false when J_c is (nearly)
-  /// rank-deficient.
-  bool factorTranspose() const;
-  /// Applies reflector i (column i of w_) to the column `x` (n entries).
-  void reflect(int i, S* x) const;
-  /// 4: P = L^{-1} (p_) with L = R^T.
-  void invertLowerFactor() const;
-  /// 5: P J_c and the row test; adds each row's mig^2 to `migSq`; true when a row excludes.
-  bool rowTestExcludes(S& migSq) const;
-  /// 6: the ball test; true when it excludes.
-  bool ballTestExcludes(const S& migSq, const S& hh) const;
-  /// 7a: J^+ (pinv_) and the centre a_ and bound b_ of (N t)_j per axis.
-  void kernelBounds() const;
-  /// 7b: constraint propagation on the kernel coordinates t; true when no t is left.
-  bool kernelPropagationExcludes() const;
-  /// Narrows the box of t_p by the constraint of axis j; true when it becomes empty.
-  bool narrowKernelBox(int j, int p) const;
-  /// 7c (k = 2): the exact test on the plane of t: the propagated box clipped by the 2 n
-  /// half-planes of the axes' strips; true when nothing is left.
-  bool kernelPolygonExcludes() const;
-  /// 8: the multiplier test (reweighted least squares for y); true when some y excludes.
-  bool multiplierExcludes() const;
-  /// True when d = -J^+ mid G (step 7's centres a_) lies inside the box by a relative 1e-6 on
-  /// every axis: it solves J_c d = -mid G, so the linearised system is solvable, no multipliers
-  /// exist, and step 8 is skipped (a heuristic only in that skipping never discards a box).
-  bool centreSolvesInside() const;
-  /// Q1 (row space of J_c) and N = Q2 (its kernel) as n x m and n x k matrices.
-  const S& q1(int row, int col) const {
-    return q_[static_cast<std::size_t>(col) * static_cast<std::size_t>(n_) +
-              static_cast<std::size_t>(row)];
-  }
-  const S& nul(int row, int col) const { return q1(row, m_ + col); }
   BernsteinBounding<S> bernstein_;
   std::vector<MidRadEvaluator<S>> evaluators_;  // per equation
   std::vector<char> affine_;     // per equation: total degree <= 1, so the gradient is constant
@@ -263,14 +230,9 @@ class LinearizedBounding final {
   S tol_;                 // relative margin covering every rounding of the test
   S u_;                   // unit of the midpoint-radius arithmetic (>= 2 x unit round-off)
   std::vector<S> affineMid_, affineRad_;  // m x n: constant gradients (affine rows only)
-  // Scratch of linearizationExcludes, sized once (matrices row-major unless noted).
-  mutable std::vector<S> c_, h_, zero_, jac_, mu_, rho_;  // jac_: m x n
-  mutable std::vector<S> w_, beta_, diag_;           // w_: J_c^T (n x m, column-major), reflectors
-  mutable std::vector<S> q_;                         // n x n orthogonal factor, column-major
-  mutable std::vector<S> p_, pj_, pjAbs_, mig_;      // P (m x m), P J_c and |P| |J_c| (m x n)
-  mutable std::vector<S> pinv_, a_, b_, tlo_, thi_;  // J^+ (n x m), centre/bound per axis, t box
-  mutable std::vector<S> polygon_, clipped_;         // 7c: vertices (t_0, t_1) interleaved
-  mutable MultiplierTest<S> multipliers_;            // 8
+  // Scratch of linearizationExcludes, sized once.
+  mutable std::vector<S> c_, zero_;     // the box's centre; zero radii
+  mutable LinearisedSystem<S> system_;  // steps 2 to 8
 };
 
 static_assert(BoundingStrategy<BernsteinBounding<double>>);

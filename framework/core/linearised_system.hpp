@@ -1,0 +1,106 @@
+/// \file linearised_system.hpp
+/// A system of m equations linearised over a box, J_c d = -g with g in mu +- rho and
+/// |d_j| <= h_j, and the tests that prove it has no solution (docs/subdivision.md, "Linearised
+/// bounding"): the subdivision's linearised bounding and the crossing connection's leaf model
+/// both produce such a system and ask it the same questions.
+#pragma once
+
+#include <vector>
+
+#include "framework/core/multipliers.hpp"
+#include "framework/core/scalar.hpp"
+
+namespace ndc {
+
+/// The linearised system of m equations in n unknowns over a box: every zero x = c + d of the
+/// equations in the box (centre c, half-widths h_j >= |x_j - c_j|) satisfies
+///
+///     J_c d = -g,   g in G := mu + [-rho, rho],
+///
+/// for the point matrix J_c and the enclosures mu, rho that the caller fills in (`jac`, `mu`,
+/// `rho`, `h`). The tests below are the steps 3 to 8 of LinearizedBounding's derivation (QR of
+/// J_c^T, the row, ball, null-space, planar and multiplier tests); every one is conservative:
+/// the identities hold for the matrices actually computed, and every floating-point sum is
+/// bounded by the relative margin `tolerance()` (at least 2 gamma_p for the longest p-term sum),
+/// so rounding never proves a solvable system empty. A rank-deficient J_c (a pivot below 1e-10
+/// of the largest row) proves nothing. The working storage is sized once by resize(): the tests
+/// do not allocate in double; use one instance per thread.
+template <class S>
+class LinearisedSystem {
+ public:
+  /// Sizes the system for m equations in n unknowns (m <= n) and sets the margin
+  /// 8 (n + m + 8) eps.
+  void resize(int n, int m);
+
+  int n() const { return n_; }
+  int m() const { return m_; }
+  /// The relative rounding margin of every bound here.
+  const S& tolerance() const { return tol_; }
+
+  std::vector<S> jac;  ///< J_c, m x n, row-major (filled by the caller)
+  std::vector<S> mu;   ///< the centres of G (m)
+  std::vector<S> rho;  ///< the radii of G (m), rounded up
+  std::vector<S> h;    ///< the box's half-widths (n), rounded up
+
+  /// True when the tests prove that no d in the box solves the system; `hh` is |h|_2^2 rounded
+  /// up, `multiplierSteps` caps the multiplier test's least-squares steps.
+  bool excludes(const S& hh, int multiplierSteps);
+
+  /// For k = n - m = 2: which facets of the box (fixed axis j at its lower end, entry 2 j, or
+  /// its upper end, entry 2 j + 1) may hold a solution, into `met` (2 n entries, 1: may). A
+  /// facet d_j = +-h_j is ruled out when no point of the planar test's polygon in the kernel
+  /// coordinates t reaches the band where (N t)_j - a_j is within the system's slack of +-h_j
+  /// (docs/crossing.md, "Facets first"). Returns true when the whole box holds no solution
+  /// (every entry 0); every entry stays 1 when J_c is rank-deficient or k != 2.
+  bool facetsMet(std::vector<char>& met);
+
+ private:
+  /// 3: Householder QR of J_c^T into w_, beta_, diag_ and Q (q_); false when J_c is (nearly)
+  /// rank-deficient.
+  bool factorTranspose();
+  /// Applies reflector i (column i of w_) to the column `x` (n entries).
+  void reflect(int i, S* x) const;
+  /// 4: P = L^{-1} (p_) with L = R^T.
+  void invertLowerFactor();
+  /// 5: P J_c and the row test; adds each row's mig^2 to `migSq`; true when a row excludes.
+  bool rowTestExcludes(S& migSq);
+  /// 6: the ball test; true when it excludes.
+  bool ballTestExcludes(const S& migSq, const S& hh) const;
+  /// 7a: J^+ (pinv_) and the centre a_ and bound b_ of (N t)_j per axis.
+  void kernelBounds();
+  /// 7b: constraint propagation on the kernel coordinates t; true when no t is left.
+  bool kernelPropagationExcludes();
+  /// Narrows the box of t_p by the constraint of axis j; true when it becomes empty.
+  bool narrowKernelBox(int j, int p);
+  /// 7c (k = 2): the exact test on the plane of t: the propagated box clipped by the 2 n
+  /// half-planes of the axes' strips (its vertices left in polygon_); true when nothing is
+  /// left.
+  bool kernelPolygonExcludes();
+  /// 8: the multiplier test (reweighted least squares for y); true when some y excludes.
+  bool multiplierExcludes(int steps);
+  /// True when d = -J^+ mid G (step 7's centres a_) lies inside the box by a relative 1e-6 on
+  /// every axis: it solves J_c d = -mid G, so the linearised system is solvable, no multipliers
+  /// exist, and step 8 is skipped (a heuristic only in that skipping never discards a box).
+  bool centreSolvesInside() const;
+  /// Q1 (row space of J_c) and N = Q2 (its kernel) as n x m and n x k matrices.
+  const S& q1(int row, int col) const {
+    return q_[static_cast<std::size_t>(col) * static_cast<std::size_t>(n_) +
+              static_cast<std::size_t>(row)];
+  }
+  const S& nul(int row, int col) const { return q1(row, m_ + col); }
+
+  int n_ = 0, m_ = 0;
+  S tol_;
+  // Scratch (matrices row-major unless noted).
+  std::vector<S> w_, beta_, diag_;           // w_: J_c^T (n x m, column-major), reflectors
+  std::vector<S> q_;                         // n x n orthogonal factor, column-major
+  std::vector<S> p_, pj_, pjAbs_, mig_;      // P (m x m), P J_c and |P| |J_c| (m x n)
+  std::vector<S> pinv_, a_, b_, tlo_, thi_;  // J^+ (n x m), centre/bound per axis, t box
+  std::vector<S> polygon_, clipped_;         // 7c: vertices (t_0, t_1) interleaved
+  MultiplierTest<S> multipliers_;            // 8
+};
+
+extern template class LinearisedSystem<double>;
+extern template class LinearisedSystem<Mpfr>;
+
+}  // namespace ndc
