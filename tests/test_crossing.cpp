@@ -72,6 +72,46 @@ void planesThrough(const std::vector<double>& p, int count, std::mt19937& rng,
   }
 }
 
+/// How far the line where the flat A x = A p meets the facet x_j = lo_j (+ width on the upper
+/// side) reaches into the rest of the leaf [lo, lo + width]^n, in widths: the largest, over the
+/// line, of the smallest distance to the leaf's other faces (negative: the line misses them by
+/// that much; 0, which the caller skips, when the flat meets the facet's plane in more or less
+/// than a line).
+double lineDepth(const Eigen::MatrixXd& a, const std::vector<double>& p,
+                 const std::vector<double>& lo, double width, int j, int side) {
+  const auto m = static_cast<int>(a.rows()), n = static_cast<int>(a.cols());
+  std::vector<int> free;
+  for (int l = 0; l < n; ++l) {
+    if (l != j) free.push_back(l);
+  }
+  Eigen::MatrixXd af(m, n - 1);
+  for (int i = 0; i < m; ++i) {
+    for (int t = 0; t < n - 1; ++t) af(i, t) = a(i, free[t]);
+  }
+  const double v = lo[j] + (side ? width : 0);
+  Eigen::VectorXd rhs = a * Eigen::Map<const Eigen::VectorXd>(p.data(), n) - a.col(j) * v;
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(af);
+  if (lu.rank() < m) return 0;
+  const Eigen::VectorXd x0 = af.completeOrthogonalDecomposition().solve(rhs);
+  Eigen::VectorXd dir = lu.kernel().col(0);
+  dir /= dir.norm();
+  // The depth along the line is concave (a minimum of linear functions): ternary search.
+  const auto depth = [&](double s) {
+    double d = 1e300;
+    for (int t = 0; t < n - 1; ++t) {
+      const double x = (x0(t) + s * dir(t) - lo[free[t]]) / width;
+      d = std::min({d, x, 1 - x});
+    }
+    return d;
+  };
+  double s0 = -1e3, s1 = 1e3;
+  for (int step = 0; step < 300; ++step) {
+    const double u = s0 + (s1 - s0) / 3, w = s1 - (s1 - s0) / 3;
+    (depth(u) < depth(w) ? s0 : s1) = depth(u) < depth(w) ? u : w;
+  }
+  return depth((s0 + s1) / 2);
+}
+
 using ndc::Problem;
 using ndc::RunResult;
 using ndc::Settings;
@@ -293,6 +333,13 @@ TEMPLATE_TEST_CASE("crossing: a leaf's affine model never excludes a face throug
         ndc::buildFacePreconditioner(model, std::span<const int>(axes), pre);
         CHECK_FALSE(ndc::faceKrawczykExcludes(model, pre, box, std::span<const int>(axes), side));
         CHECK_FALSE(ndc::faceMultipliersExclude(model, box, std::span<const int>(axes), side, 8));
+        // The two facets that hold the face, and so p, are not ruled out (n >= 3: k = 2).
+        ndc::LinearisedSystem<S> system;
+        std::vector<char> met;
+        CHECK_FALSE(ndc::facetsOfModel(model, system, met));
+        REQUIRE(met.size() == std::size_t(2 * n));
+        CHECK(met[2 * a0 + (side & 1)] == 1);
+        CHECK(met[2 * a1 + ((side >> 1) & 1)] == 1);
         ++faces;
       }
       // A leaf far outside the sphere: every face excluded.
@@ -389,6 +436,68 @@ TEMPLATE_TEST_CASE("crossing: the Krawczyk test of a leaf's faces decides linear
   CHECK(outside > 200);
   CHECK(inside > 50);
   CHECK(onlyJointly > 0);
+}
+
+TEMPLATE_TEST_CASE("crossing: a leaf model's facets decide linear systems", "[crossing]",
+                   NDC_SCALARS) {
+  // Generated 2-flats in R^3..R^8 (n - 2 hyperplanes with small integer coefficients through a
+  // point p of the 1/64 grid: every literal exact, the leaf model exact up to rounding) and
+  // leaves of width w near p. On the facet x_j = v the flat is a line, which meets the rest of
+  // the leaf or not: facetsOfModel must rule out exactly the facets whose line stays more than
+  // 1% of w outside the leaf, and keep those whose line passes more than 1% of w inside it.
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  std::mt19937 rng(31);
+  std::uniform_int_distribution<int> grid(-64, 64);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int missed = 0, met = 0, emptyLeaves = 0;
+  for (int n = 3; n <= 8; ++n) {
+    const int m = n - 2;
+    for (int system = 0; system < 6; ++system) {
+      const std::vector<std::string> names = variableNames(n);
+      std::vector<double> p(n);
+      for (int j = 0; j < n; ++j) p[j] = grid(rng) / 64.0;
+      Eigen::MatrixXd a;
+      std::vector<ndc::Expression> equations;
+      planesThrough(p, m, rng, names, equations, &a);
+      if (Eigen::FullPivLU<Eigen::MatrixXd>(a).rank() < m) continue;
+      std::vector<ndc::MidRadEvaluator<S>> evaluators;
+      for (const ndc::Expression& e : equations) evaluators.emplace_back(e.sharedTape());
+      const std::vector<S> level(equations.size(), S(0));
+      ndc::LeafModel<S> model;
+      ndc::LinearisedSystem<S> linearised;
+      std::vector<char> facets;
+      for (int trial = 0; trial < 30; ++trial) {
+        const double width = std::pow(2.0, -static_cast<int>(rng() % 12));
+        ndc::Box<S> box{std::vector<S>(n), std::vector<S>(n)};
+        std::vector<double> lo(n);
+        for (int j = 0; j < n; ++j) {
+          lo[j] = p[j] - width * (std::round(64 * (1.6 * unit(rng) - 0.3)) / 64);
+          box.lo[j] = S(lo[j]);
+          box.hi[j] = S(lo[j] + width);
+        }
+        ndc::buildLeafModel(evaluators, box, std::span<const S>(level), model);
+        const bool empty = ndc::facetsOfModel(model, linearised, facets);
+        REQUIRE(facets.size() == std::size_t(2 * n));
+        emptyLeaves += empty;
+        for (int j = 0; j < n; ++j) {
+          for (int side = 0; side < 2; ++side) {
+            const double depth = lineDepth(a, p, lo, width, j, side);
+            INFO("n = " << n << ", system " << system << ", trial " << trial << ", facet " << j
+                        << (side ? "+" : "-") << ": the line reaches " << depth
+                        << " widths into the leaf");
+            if (std::abs(depth) < 0.01) continue;
+            CHECK(bool(facets[2 * j + side]) == (depth > 0));
+            (depth > 0 ? met : missed) += 1;
+          }
+        }
+      }
+    }
+  }
+  INFO(met << " facets met, " << missed << " missed, " << emptyLeaves << " leaves empty");
+  CHECK(met > 200);
+  CHECK(missed > 500);
+  CHECK(emptyLeaves > 20);
 }
 
 TEMPLATE_TEST_CASE("crossing: closed curves in R^2..R^6", "[crossing]", NDC_SCALARS) {

@@ -433,6 +433,8 @@ class AdaptiveCrossing {
   /// Reweighted least-squares steps of a face's multiplier test (faceMultipliersExclude), as in
   /// the linearized bounding.
   static constexpr int kFaceMultiplierSteps = 8;
+  /// A leaf's facet mask (facetMask) when nothing is known: every facet may meet M_c.
+  static constexpr std::uint64_t kAllFacets = ~std::uint64_t{0};
 
   AdaptiveCrossing(const ConnectionInput<S>& in, int maxFaceDepth)
       : in_(in),
@@ -780,7 +782,7 @@ class AdaptiveCrossing {
   /// crossFaces adds at excluded base cells, change neither which faces are minimal (a base-level
   /// leaf where there was none is never finer) nor who owns them (a touch leaf comes after every
   /// leaf already there), so this list stays valid for the whole walk.
-  void ownedFaces(std::int32_t c, std::vector<OwnedFace>& out) const {
+  void ownedFaces(std::int32_t c, std::uint64_t facets, std::vector<OwnedFace>& out) const {
     const int level = tree_.level(c);
     // Per-thread scratch (ownedFaces runs in prefetchLeaf's tasks): no allocation per leaf.
     thread_local std::vector<std::int32_t> ci, position;
@@ -827,9 +829,11 @@ class AdaptiveCrossing {
           around[0] = s0 ? self : o0;
           around[1] = s0 ? o0 : self;
         } else {
-          // The regions across one face first (looked up once), so that a face that is not
-          // c's is rejected before its diagonal region is looked up.
+          // A face in a facet M_c misses is not crossed (and not recorded: no region is
+          // looked up for it). The regions across one face next (looked up once), so that a
+          // face that is not c's is rejected before its diagonal region is looked up.
           const int s1 = (side >> 1) & 1, d1 = s1 ? 1 : -1;
+          if (!facetMet(facets, axes[0], s0) || !facetMet(facets, axes[1], s1)) continue;
           const Occupant& o1 = acrossOf(axes[1], d1);
           if (rulesOut(o1) || rulesOut(o0)) continue;
           const Occupant diagonal = lookup(axes[0], d0, axes[1], d1);
@@ -867,6 +871,21 @@ class AdaptiveCrossing {
     return static_cast<std::uint32_t>(a << k_) + static_cast<std::uint32_t>(side);
   }
 
+  /// A leaf's facets as facetsOfModel gives them (entry 2 j + side) in one mask, bit 2 j + side
+  /// set where M_c may meet the facet; kAllFacets (every facet may) beyond 32 variables.
+  std::uint64_t facetMask(const std::vector<char>& met) const {
+    if (n_ > 32 || met.empty()) return kAllFacets;
+    std::uint64_t mask = 0;
+    for (std::size_t f = 0; f < met.size(); ++f) mask |= std::uint64_t(met[f] != 0) << f;
+    return mask;
+  }
+
+  /// Whether `mask` (facetMask) lets M_c meet the facet fixing axis a at its lower (side 0) or
+  /// upper (1) end.
+  bool facetMet(std::uint64_t mask, int a, int side) const {
+    return mask == kAllFacets || ((mask >> (2 * a + side)) & 1) != 0;
+  }
+
   /// Whether a face leaves no trace in the walk: not crossed, and addFace flags none of its
   /// leaves (proven, decided, clear of rounding and of the face's boundary).
   template <class Face>
@@ -879,6 +898,8 @@ class AdaptiveCrossing {
   struct LeafFaces {
     std::int8_t empty = -1;  ///< restrictLeaf's answer (-1: not restricted)
     std::int8_t band = 0;    ///< and its band
+    /// The facets the leaf model shows M_c may meet (bit 2 j + side; kAllFacets: unknown).
+    std::uint64_t facets = kAllFacets;
     std::vector<std::pair<std::uint32_t, FaceResult<S>>> faces;  ///< new ones, by kind
     std::vector<FaceResult<S>> kept;  ///< copies of the kept faces (earlier rounds) in `visit`
     /// The owned faces that are not quiet, in the order of ownedFaces: (the face, its solution:
@@ -893,6 +914,7 @@ class AdaptiveCrossing {
     void clear() {
       empty = -1;
       band = 0;
+      facets = kAllFacets;
       faces.clear();
       kept.clear();
       visit.clear();
@@ -909,8 +931,9 @@ class AdaptiveCrossing {
   /// A window of kWindowLeaves leaves of crossFaces and what its tasks found.
   struct Window {
     std::int32_t from = 0, end = 0;
-    std::vector<std::int32_t> leaves;  ///< the active leaves that may be crossed
-    std::vector<std::int8_t> prior;    ///< and their empty_ when the window started
+    std::vector<std::int32_t> leaves;        ///< the active leaves that may be crossed
+    std::vector<std::int8_t> prior;          ///< and their empty_ when the window started
+    std::vector<std::uint64_t> priorFacets;  ///< and their facetsMet_
     std::vector<const RootForms*> forms;
     std::vector<LeafFaces> slots;  ///< per leaf from `from` on
     std::size_t used = 0;          ///< the slots holding answers of the window's last use
@@ -927,10 +950,12 @@ class AdaptiveCrossing {
     w.end = std::min(static_cast<std::int32_t>(tree_.size()), from + kWindowLeaves);
     w.leaves.clear();
     w.prior.clear();
+    w.priorFacets.clear();
     for (std::int32_t c = from; c < w.end; ++c) {
       if (!tree_.active(c) || empty_[c] == 1) continue;
       w.leaves.push_back(c);
       w.prior.push_back(empty_[c]);
+      w.priorFacets.push_back(facetsMet_[c]);
     }
     w.forms = rootFormsOf(w.leaves);
     w.slots.resize(kWindowLeaves);
@@ -940,7 +965,7 @@ class AdaptiveCrossing {
       parallelFor(std::exchange(w.used, std::size_t(w.end - w.from)),
                   [&](std::size_t i) { w.slots[i].clear(); });
       parallelFor(w.leaves.size(), [&](std::size_t i) {
-        prefetchLeaf(w.leaves[i], w.prior[i], *w.forms[i],
+        prefetchLeaf(w.leaves[i], w.prior[i], w.priorFacets[i], *w.forms[i],
                      w.slots[std::size_t(w.leaves[i] - w.from)]);
       });
     });
@@ -971,6 +996,7 @@ class AdaptiveCrossing {
       const LeafFaces& known = w.slots[std::size_t(c - w.from)];
       if (empty_[c] < 0) empty_[c] = emptyOf(c, known) ? 1 : 0;
       if (empty_[c] == 1) continue;  // no level set between M and M_c meets it
+      if (known.facets != kAllFacets) facetsMet_[c] = known.facets;
       const int level = tree_.level(c);
       ci.assign(tree_.index(c).begin(), tree_.index(c).end());
       for (const auto& [f, face] : known.visit) {
@@ -992,8 +1018,10 @@ class AdaptiveCrossing {
     }
   }
 
-  /// One task of startWindow: leaf c, whose empty_ was `prior` when its window started.
-  void prefetchLeaf(std::int32_t c, std::int8_t prior, const RootForms& rf, LeafFaces& out) const {
+  /// One task of startWindow: leaf c, whose empty_ was `prior` and facetsMet_ `priorFacets`
+  /// when its window started.
+  void prefetchLeaf(std::int32_t c, std::int8_t prior, std::uint64_t priorFacets,
+                    const RootForms& rf, LeafFaces& out) const {
     std::vector<Bernstein<S>> own;
     std::vector<Bernstein<S>>& patches = leafScratch(own);
     bool restricted = false;
@@ -1024,9 +1052,20 @@ class AdaptiveCrossing {
     }
     // A prior emptiness is never 1 (startWindow skips those leaves).
     if (out.empty == 1) return;
+    // For a surface, the facets the model shows M_c may meet (docs/crossing.md, "Facets
+    // first"), once per leaf: a face in a facet M_c misses is not crossed, and ownedFaces
+    // leaves it out.
+    out.facets = priorFacets;
+    if (k_ == 2 && m_ > 1 && byEvaluation_ && priorFacets == kAllFacets) {
+      buildModel();
+      thread_local std::vector<char> met;
+      std::optional<LinearisedSystem<S>> fresh;
+      facetsOfModel(model, threadScratch<S, LinearisedSystem<S>>(fresh), met);
+      out.facets = facetMask(met);
+    }
     // The faces c owns, per thread: the slot keeps only those the walk visits.
     thread_local std::vector<OwnedFace> owned;
-    ownedFaces(c, owned);
+    ownedFaces(c, out.facets, owned);
     // The Krawczyk preconditioners of the faces' axis choices, each built when a face of that
     // choice is the first that the model's enclosure alone does not exclude.
     thread_local std::vector<FacePreconditioner<S>> pre;
@@ -1270,6 +1309,7 @@ class AdaptiveCrossing {
     singular_.resize(size, 0);
     graph_.resize(size, -1);
     faceGraph_.resize(size, -1);
+    facetsMet_.resize(size, kAllFacets);
     failure_.resize(size, Failure::kNone);
   }
 
@@ -1364,9 +1404,14 @@ class AdaptiveCrossing {
       bool wholeExcluded = false;
       const bool wholeKnown = byEvaluation_ && evaluatedJacobian(box, whole, wholeExcluded);
       int failed = -1;
+      // A facet the leaf model shows M_c misses needs no test (docs/crossing.md, "Facets
+      // first").
+      const auto met = [&](int a, int side) { return facetMet(facetsMet_[leaf], a, side); };
       for (int a = 0; a < n_ && failed < 0; ++a) {
+        if (!met(a, 0) && !met(a, 1)) continue;
         if (wholeKnown && t.test.graph(std::span<const Interval<S>>(whole), freeAxes(a))) continue;
         for (int side = 0; side < 2 && failed < 0; ++side) {
+          if (!met(a, side)) continue;
           Box<S> face = box;
           face.lo[a] = face.hi[a] = side == 1 ? box.hi[a] : box.lo[a];
           bool excluded = false;
@@ -1898,7 +1943,7 @@ class AdaptiveCrossing {
     tree_.setBaseCells(static_cast<std::int32_t>(in_.cells.size()));
     faces_.clear();
     empty_.clear(), bandEmpty_.clear(), unproven_.clear(), stuck_.clear(), singular_.clear(),
-        graph_.clear(), faceGraph_.clear();
+        graph_.clear(), faceGraph_.clear(), facetsMet_.clear();
     failure_.clear();
     trouble_.clear(), hasTrouble_.clear();
     refined_ = 0;
@@ -2292,6 +2337,8 @@ class AdaptiveCrossing {
   std::vector<std::int8_t> empty_, bandEmpty_;
   std::vector<std::uint8_t> unproven_, stuck_, singular_;
   std::vector<std::int8_t> graph_, faceGraph_;
+  /// Per leaf, the facets the leaf model shows M_c may meet (facetMask; kAllFacets: unknown).
+  std::vector<std::uint64_t> facetsMet_;
   FlatMap<CellKey, std::int32_t> touchLeaves_;  ///< the touch leaves of one crossFaces, by base key
   std::array<Window, 2> windows_;  ///< crossFaces's: the one walked, the one solved beside
   std::vector<CellKey> deferred_;  ///< deferTouchLeaf's, until addDeferredLeaves

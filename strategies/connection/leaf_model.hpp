@@ -16,6 +16,7 @@
 
 #include "framework/core/box.hpp"
 #include "framework/core/iteration.hpp"
+#include "framework/core/linearised_system.hpp"
 #include "framework/core/midrad.hpp"
 #include "framework/core/multipliers.hpp"
 #include "framework/core/parallel.hpp"
@@ -330,6 +331,37 @@ bool faceMultipliersExclude(const LeafModel<S>& model, const Box<S>& box, std::s
   }
   return w.test.excludes(static_cast<int>(m), static_cast<int>(free), w.jac.data(), w.mu.data(),
                          w.rho.data(), w.h.data(), gamma, iterations);
+}
+
+/// For a surface (k = 2): which facets of the model's leaf (fixed axis j at its lower end,
+/// entry 2 j, or upper end, 2 j + 1) may hold a zero of F - level, into `met` (2 n entries, 1:
+/// may), by the planar test of the model's linearisation over the whole leaf
+/// (LinearisedSystem::facetsMet: J_c the slopes' midpoints, G the value widened by the slopes'
+/// radii times the half-widths). A face of dimension n - 2 lies in two facets, so one facet ruled
+/// out rules out its 2 (n - 1) faces, and a leaf M_c crosses near its middle meets few facets:
+/// one O(n^2 m) test per leaf instead of a test per face (docs/crossing.md, "Facets first").
+/// Returns true when no point of the leaf is a zero; every entry is 1 where nothing is proven.
+template <class S>
+bool facetsOfModel(const LeafModel<S>& model, LinearisedSystem<S>& system, std::vector<char>& met) {
+  const std::size_t m = model.valueMid.size(), n = model.centre.size();
+  met.assign(2 * n, 1);
+  if (!model.valid || n != m + 2) return false;
+  if (system.n() != static_cast<int>(n) || system.m() != static_cast<int>(m))
+    system.resize(static_cast<int>(n), static_cast<int>(m));
+  const S up = S(1) + system.tolerance();
+  std::copy(model.radius.begin(), model.radius.end(), system.h.begin());
+  for (std::size_t i = 0; i < m; ++i) {
+    // F_i - level_i in valueMid +- valueRad + sum_j (gradMid_ij +- gradRad_ij) d_j, |d_j| <= h_j.
+    S spread = model.valueRad[i];
+    for (std::size_t j = 0; j < n; ++j) {
+      system.jac[i * n + j] = model.gradMid[i * n + j];
+      spread += model.gradRad[i * n + j] * model.radius[j];
+    }
+    system.mu[i] = model.valueMid[i];
+    system.rho[i] = spread * up + S(std::numeric_limits<double>::min());
+    if (!isFinite(system.rho[i])) return false;
+  }
+  return system.facetsMet(met);
 }
 
 }  // namespace ndc
