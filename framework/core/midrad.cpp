@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 namespace ndc {
 
@@ -269,8 +270,13 @@ bool semidefiniteSlack(int n, const std::vector<double>& m, const std::vector<do
 
 Curvature quadraticCurvature(const std::shared_ptr<const Tape>& tape) {
   using std::abs;
-  if (!tape->leaves().empty() || tape->totalDegree(3) != 2) return {};
+  if (!tape->leaves().empty() || tape->totalDegree(3) > 2) return {};
   const int n = tape->dim();
+  Curvature out;
+  if (tape->totalDegree(3) < 2) {  // affine: H = 0
+    out.magnitude.assign(std::size_t(n) * std::size_t(n), 0.0);
+    return out;
+  }
   const double eps = ScalarTraits<double>::epsilon();
   MidRadEvaluator<double> e(tape);
   const auto size = static_cast<std::size_t>(n);
@@ -298,13 +304,40 @@ Curvature quadraticCurvature(const std::shared_ptr<const Tape>& tape) {
       m[jk] = (hm[jk] + hm[kj]) / 2;
       radius[jk] = (hr[jk] + abs(hm[jk] - m[jk]) + eps * abs(m[jk])) * (1 + 4 * eps);
     }
+  out.magnitude.resize(m.size());
+  for (std::size_t jk = 0; jk < m.size(); ++jk)
+    out.magnitude[jk] = (abs(m[jk]) + radius[jk]) * (1 + 4 * eps);
   for (int sign : {1, -1}) {
     std::vector<double> signed_ = m;
     for (double& v : signed_) v *= sign;
     double slack = 0;
-    if (semidefiniteSlack(n, signed_, radius, slack)) return {sign, slack};
+    if (semidefiniteSlack(n, signed_, radius, slack)) {
+      out.sign = sign;
+      out.slack = slack;
+      break;
+    }
   }
-  return {};
+  return out;
+}
+
+template <class S>
+bool MidRadEvaluator<S>::gradientSpread(std::span<const S> radius, std::span<S> spread) const {
+  if constexpr (!std::is_same_v<S, double>) {
+    return false;
+  } else {
+    if (!gradientAffine_) return false;
+    const std::vector<double>& magnitude = curvature().magnitude;
+    const std::size_t n = radius.size();
+    if (magnitude.size() != n * n) return false;
+    // n nonnegative products summed: gamma_n relative, and underflow below the smallest normal.
+    const double up = 1 + double(4 * (n + 4)) * ScalarTraits<double>::epsilon();
+    for (std::size_t j = 0; j < n; ++j) {
+      double sum = 0;
+      for (std::size_t l = 0; l < n; ++l) sum += magnitude[j * n + l] * radius[l];
+      spread[j] = sum * up + std::numeric_limits<double>::min();
+    }
+    return true;
+  }
 }
 
 template class MidRadEvaluator<double>;

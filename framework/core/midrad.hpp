@@ -20,6 +20,9 @@ struct Curvature {
   /// 0: neither is proven (H indefinite, or the program is not a quadratic without leaves).
   int sign = 0;
   double slack = 0;  ///< rounded up; covers the rounding of H's enclosure and factorisation
+  /// For a program of total degree at most 2 without leaves, bounds of |H_jk| (n x n,
+  /// row-major, rounded up; zero for an affine one); empty for any other program.
+  std::vector<double> magnitude;
 };
 
 /// The curvature of `tape`, proven in double: H enclosed column by column from gradients
@@ -27,7 +30,8 @@ struct Curvature {
 /// +-H ~ L D L^T with D > 0 (stopped where the remaining pivots are below 1e-12 of the largest
 /// diagonal), so that d^T (+-H) d >= -sum_jk B_jk |d_j| |d_k| with B bounding H - L D L^T
 /// (the enclosure's radius, the symmetrisation and every rounding). Accepted when the slack is
-/// below 1e-8 of sum |H_jk|; otherwise sign 0.
+/// below 1e-8 of sum |H_jk|; otherwise sign 0. The enclosure's magnitudes are kept whatever the
+/// sign.
 Curvature quadraticCurvature(const std::shared_ptr<const Tape>& tape);
 
 /// The Taylor remainder d^T H d / 2 over |d_j| <= h_j as a centre and radius, from `bound` >=
@@ -75,6 +79,12 @@ class MidRadEvaluator {
   /// so that its gradient is affine: F(c + d) = F(c) + grad F(c) . d + d^T H d / 2 exactly, and
   /// a gradient enclosed over c +- h has radius at least sum_l |H_jl| h_l along each axis j.
   bool gradientAffine() const { return gradientAffine_; }
+  /// For a program whose gradient is affine, spread_j >= sum_l |H_jl| radius_l (rounded up):
+  /// what the gradient's range over centre +- radius adds to the gradient at the centre, from
+  /// the curvature's magnitudes, in O(n^2) instead of a run over the box. False (spread
+  /// untouched) for other programs and in MPFR (H is enclosed in double, from the program's
+  /// constants rounded to double).
+  bool gradientSpread(std::span<const S> radius, std::span<S> spread) const;
   /// quadraticCurvature of the program, computed on first use (then cached).
   const Curvature& curvature() const {
     if (!curvature_) curvature_ = quadraticCurvature(tape_);

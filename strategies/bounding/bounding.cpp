@@ -170,6 +170,7 @@ LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& 
   tol_ = S(8 * (n_ + m_ + 8)) * u_;
   for (const Expression& e : problem.equations) evaluators_.emplace_back(e.sharedTape());
   c_.resize(n);
+  spread_.resize(n);
   zero_.assign(n, S(0));
   system_.resize(n_, m_);
   // Affine equations have a constant gradient: enclose it once, by the outward-rounded interval
@@ -287,8 +288,14 @@ bool LinearizedBounding<S>::lineariseRows(bool affine) const {
         r += affineRad_[rowMajor(i, j, n)] * system_.h[j];
       }
     } else {
-      if (!evaluator.run(c_, system_.h, true)) return false;
-      for (int j = 0; j < n; ++j) r += evaluator.rad(j + 1) * system_.h[j];
+      // The gradient's range over X: for a quadratic, sum_j (|H| h)_j h_j bounds what it adds
+      // (its centre comes from the run at c below); otherwise a run over X.
+      if (quadratic_[i] && evaluator.gradientSpread(system_.h, spread_)) {
+        for (int j = 0; j < n; ++j) r += spread_[j] * system_.h[j];
+      } else {
+        if (!evaluator.run(c_, system_.h, true)) return false;
+        for (int j = 0; j < n; ++j) r += evaluator.rad(j + 1) * system_.h[j];
+      }
       if (quadratic_[i]) {
         // d^T H d / 2 in [-r/2, r/2] from the gradient's radius over X (one-sided for a
         // semidefinite H), the gradient itself at c.

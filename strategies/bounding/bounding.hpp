@@ -232,6 +232,7 @@ class LinearizedBounding final {
   std::vector<S> affineMid_, affineRad_;  // m x n: constant gradients (affine rows only)
   // Scratch of linearizationExcludes, sized once.
   mutable std::vector<S> c_, zero_;     // the box's centre; zero radii
+  mutable std::vector<S> spread_;       // MidRadEvaluator::gradientSpread
   mutable LinearisedSystem<S> system_;  // steps 2 to 8
 };
 

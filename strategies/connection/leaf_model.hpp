@@ -74,14 +74,22 @@ void buildLeafModel(std::vector<MidRadEvaluator<S>>& evaluators, const Box<S>& b
   model.gradRad.resize(m * n);
   model.valid = false;
   const S up = S(1) + S(8) * ScalarTraits<S>::epsilon();
+  thread_local std::vector<S> spread;
+  spread.resize(n);
   for (std::size_t i = 0; i < m; ++i) {
     MidRadEvaluator<S>& e = evaluators[i];
-    if (!e.run(std::span<const S>(model.centre), std::span<const S>(model.radius), true)) return;
-    for (std::size_t j = 0; j < n; ++j) {
-      model.gradMid[i * n + j] = e.mid(static_cast<int>(j) + 1);
-      model.gradRad[i * n + j] = e.rad(static_cast<int>(j) + 1);
-    }
     const bool taylor = e.gradientAffine();
+    // J(X): for a quadratic its radius from |H| (gradientSpread; the centres come from the run
+    // at c below), otherwise a run over the leaf.
+    if (taylor && e.gradientSpread(std::span<const S>(model.radius), std::span<S>(spread))) {
+      for (std::size_t j = 0; j < n; ++j) model.gradRad[i * n + j] = spread[j];
+    } else {
+      if (!e.run(std::span<const S>(model.centre), std::span<const S>(model.radius), true)) return;
+      for (std::size_t j = 0; j < n; ++j) {
+        model.gradMid[i * n + j] = e.mid(static_cast<int>(j) + 1);
+        model.gradRad[i * n + j] = e.rad(static_cast<int>(j) + 1);
+      }
+    }
     if (!e.run(std::span<const S>(model.centre), std::span<const S>(zero), taylor)) return;
     const int sign = taylor ? e.curvature().sign : 0;
     S remainder = 0;  // sum_j rad J_ij(X) radius_j / 2 >= |d^T H d| / 2 (semidefinite H)
