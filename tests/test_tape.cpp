@@ -171,6 +171,90 @@ TEMPLATE_TEST_CASE("Tape: the midpoint-radius evaluator encloses value and gradi
   }
 }
 
+TEMPLATE_TEST_CASE("Tape: the quadratic form encloses value and gradient, as tight as the pass",
+                   "[tape]", NDC_SCALARS) {
+  // Generated programs of total degree <= 2 in R^1..R^8 (sums and differences of squares of
+  // random affine forms, products of two affine forms, affine forms, sparse quadratics), each
+  // on points, on boxes with some zero radii and on wide boxes: run() (the quadratic form) must
+  // enclose the exact value and gradient at sample points of the box (its corners among them),
+  // be no wider than the pass over the program up to rounding, and gradientSpread must bound
+  // how far the gradient moves from the centre's.
+  using S = TestType;
+  PrecisionScope<S> scope(160);
+  std::mt19937 rng(83);
+  const S eps = ndc::ScalarTraits<S>::epsilon();
+  int runs = 0;
+  for (int n = 1; n <= 8; ++n) {
+    std::vector<std::string> names;
+    for (int j = 0; j < n; ++j) names.push_back("x" + std::to_string(j));
+    const auto affine = [&]() {
+      std::ostringstream e;
+      e.precision(17);
+      e << "(";
+      for (int j = 0; j < n; ++j)
+        e << (j ? " + " : "") << "(" << uniform<double>(rng, -2, 2) << ")*x" << j;
+      e << " + (" << uniform<double>(rng, -1, 1) << "))";
+      return e.str();
+    };
+    for (int kind = 0; kind < 5; ++kind) {
+      std::string text;
+      if (kind == 0) text = affine() + "^2 + " + affine() + "^2 - 1";
+      if (kind == 1) text = affine() + "^2 - 2*" + affine() + "^2 + 0.25";
+      if (kind == 2) text = affine() + "*" + affine();
+      if (kind == 3) text = affine();
+      if (kind == 4)
+        text = "x0^2 - 3*x" + std::to_string(n - 1) + "*x" + std::to_string(n / 2) + " + 0.5";
+      INFO("n = " << n << ": " << text);
+      const Expression e = Expression::parse(text, names);
+      const ndc::MidRadEvaluator<S> evaluator(e.sharedTape());
+      REQUIRE(evaluator.quadraticForm());
+      for (int trial = 0; trial < 12; ++trial) {
+        std::vector<S> c(n), r(n);
+        for (int j = 0; j < n; ++j) {
+          c[j] = uniform<S>(rng, -2, 2);
+          const int shape = trial % 4;  // a point, some axes fixed, tiny, wide
+          r[j] = shape == 0                 ? S(0)
+                 : shape == 1 && j % 2 == 0 ? S(0)
+                 : shape == 2               ? S(1e-9)
+                                            : uniform<S>(rng, 0, 0.5);
+        }
+        REQUIRE(evaluator.runProgram(c, r, true));
+        std::vector<S> passMid(n + 1), passRad(n + 1);
+        for (int q = 0; q <= n; ++q) passMid[q] = evaluator.mid(q), passRad[q] = evaluator.rad(q);
+        std::vector<S> spread(n);
+        REQUIRE(evaluator.gradientSpread(r, spread));
+        REQUIRE(evaluator.run(c, r, true));
+        ++runs;
+        for (int q = 0; q <= n; ++q) {
+          using std::abs;
+          const S slack = S(1e4) * S(n + 2) * eps * (1 + abs(passMid[q]));
+          CHECK(evaluator.rad(q) <= passRad[q] * (1 + S(1e-6)) + slack);
+          CHECK(abs(evaluator.mid(q) - passMid[q]) <= evaluator.rad(q) + passRad[q]);
+        }
+        PrecisionScope<Mpfr> high(kExactBits);
+        std::vector<Mpfr> centre, gc(n);
+        for (const S& v : c) centre.push_back(exact(v));
+        e.evaluate<Mpfr>(centre, gc);
+        for (int i = 0; i < 12; ++i) {
+          // A corner of the box first, then points inside it.
+          std::vector<Mpfr> p, g(n);
+          for (int j = 0; j < n; ++j) {
+            const S t = i < 4 ? S((i >> (j % 2)) & 1 ? 1 : -1) : uniform<S>(rng, -1, 1);
+            p.push_back(exact(c[j]) + exact(t) * exact(r[j]));
+          }
+          const Mpfr value = e.evaluate<Mpfr>(p, g);
+          for (int q = 0; q <= n; ++q) {
+            const Mpfr truth = q == 0 ? value : g[q - 1];
+            CHECK(abs(truth - exact(evaluator.mid(q))) <= exact(evaluator.rad(q)));
+          }
+          for (int j = 0; j < n; ++j) CHECK(abs(g[j] - gc[j]) <= exact(spread[j]));
+        }
+      }
+    }
+  }
+  CHECK(runs == 8 * 5 * 12);
+}
+
 TEMPLATE_TEST_CASE("Tape: the magnitude bound and its operation count", "[tape]", NDC_SCALARS) {
   using S = TestType;
   PrecisionScope<S> scope(160);

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <type_traits>
 
 namespace ndc {
 
@@ -64,11 +63,132 @@ MidRadEvaluator<S>::MidRadEvaluator(std::shared_ptr<const Tape> tape)
   leafRad_ = leafMid_;
   leafDone_.assign(tape_->leaves().size(), 0);
   gradientAffine_ = tape_->leaves().empty() && tape_->totalDegree(3) <= 2;
+  if (gradientAffine_ && !buildForm()) form_.reset();
+}
+
+template <class S>
+bool MidRadEvaluator<S>::buildForm() {
+  // f0 = F(0) and g0 = grad F(0); column l of H = grad F(e_l) - g0 (the gradient is affine).
+  using std::abs;
+  const auto n = static_cast<std::size_t>(tape_->dim());
+  std::vector<S> x(n, S(0)), zero(n, S(0));
+  QuadraticForm f;
+  if (!runProgram(x, zero, true)) return false;
+  f.f0m = stackMid_[0], f.f0r = stackRad_[0];
+  f.g0m.assign(stackMid_.begin() + 1, stackMid_.begin() + 1 + long(n));
+  f.g0r.assign(stackRad_.begin() + 1, stackRad_.begin() + 1 + long(n));
+  std::vector<S> hm(n * n), hr(n * n);
+  for (std::size_t l = 0; l < n; ++l) {
+    x[l] = 1;
+    if (!runProgram(x, zero, true)) return false;
+    x[l] = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      hm[j * n + l] = stackMid_[j + 1] - f.g0m[j];
+      hr[j * n + l] = (stackRad_[j + 1] + f.g0r[j] + u_ * abs(hm[j * n + l])) * up_;
+    }
+  }
+  // H is symmetric: its midpoint, with |H_jl - mid| <= hr_jl + |hm_jl - mid|; exact zeros (a
+  // variable in no product) are left out.
+  for (std::size_t j = 0; j < n; ++j)
+    for (std::size_t l = 0; l < n; ++l) {
+      const S& a = hm[j * n + l];
+      const S& b = hm[l * n + j];
+      if (a == 0 && b == 0 && hr[j * n + l] == 0 && hr[l * n + j] == 0) continue;
+      const S mid = (a + b) / 2;
+      const S rad = (std::max(hr[j * n + l], hr[l * n + j]) + abs(a - mid) + u_ * abs(mid)) * up_;
+      f.row.push_back(static_cast<std::uint32_t>(j));
+      f.column.push_back(static_cast<std::uint32_t>(l));
+      f.hm.push_back(mid);
+      f.hr.push_back(rad);
+      f.habs.push_back((abs(mid) + rad) * up_);
+    }
+  form_ = std::move(f);
+  formG_.resize(n);
+  formMagnitude_.resize(n);
+  return true;
 }
 
 template <class S>
 bool MidRadEvaluator<S>::run(std::span<const S> centre, std::span<const S> radius,
                              bool gradient) const {
+  return form_ ? runForm(centre, radius, gradient) : runProgram(centre, radius, gradient);
+}
+
+template <class S>
+bool MidRadEvaluator<S>::runForm(std::span<const S> centre, std::span<const S> radius,
+                                 bool gradient) const {
+  using std::abs;
+  using std::isfinite;
+  const QuadraticForm& f = *form_;
+  const std::size_t n = f.g0m.size(), nonzeros = f.hm.size();
+  stride_ = gradient ? n + 1 : 1;
+  // Sums of up to n + 2 terms: gamma_(n+2) <= (n + 2) u (u >= 2 x unit round-off) of their
+  // magnitudes, and the radii's own sums rounded up by `up`.
+  const S gamma = S(n + 2) * u_, up = S(1) + S(n + 8) * u_;
+  // G(c) = g0 + H c into the gradient slots (midpoints) and formG_ (radii); the magnitudes of
+  // its terms go to the rounding bound.
+  S* gm = &stackMid_[1];
+  std::vector<S>& gr = formG_;
+  std::vector<S>& mag = formMagnitude_;
+  for (std::size_t j = 0; j < n; ++j) {
+    gm[j] = f.g0m[j];
+    gr[j] = f.g0r[j];
+    mag[j] = abs(f.g0m[j]);
+  }
+  for (std::size_t t = 0; t < nonzeros; ++t) {
+    const S& c = centre[f.column[t]];
+    const S term = f.hm[t] * c;
+    gm[f.row[t]] += term;
+    gr[f.row[t]] += f.hr[t] * abs(c);
+    mag[f.row[t]] += abs(term);
+  }
+  for (std::size_t j = 0; j < n; ++j) gr[j] = (gr[j] + gamma * mag[j]) * up;
+  // F(c) = f0 + sum_j c_j (g0_j + G_j) / 2.
+  S fm = f.f0m, fr = f.f0r, fmag = abs(f.f0m);
+  for (std::size_t j = 0; j < n; ++j) {
+    const S w = (f.g0m[j] + gm[j]) / 2;
+    const S wr = (f.g0r[j] + gr[j]) / 2 + u_ * abs(w);
+    const S term = centre[j] * w;
+    fm += term;
+    fr += abs(centre[j]) * wr;
+    fmag += abs(term);
+  }
+  fr = (fr + gamma * fmag) * up;
+  // Over the box: F(c + d) = F(c) + G(c) . d + d^T H d / 2 and grad F(c + d) = G(c) + H d.
+  bool wide = false;
+  for (std::size_t j = 0; j < n && !wide; ++j) wide = radius[j] != 0;
+  if (wide) {
+    S* spread = &stackRad_[1];  // (|H| h)_j, then the gradient's radii
+    for (std::size_t j = 0; j < n; ++j) spread[j] = 0;
+    for (std::size_t t = 0; t < nonzeros; ++t) spread[f.row[t]] += f.habs[t] * radius[f.column[t]];
+    S reach = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      spread[j] *= up;
+      reach += (abs(gm[j]) + gr[j] + spread[j] / 2) * radius[j];
+      gr[j] = (gr[j] + spread[j]) * up;
+    }
+    fr = (fr + reach * up) * up;
+  }
+  stackMid_[0] = fm;
+  stackRad_[0] = fr;
+  for (std::size_t j = 0; gradient && j < n; ++j) stackRad_[j + 1] = gr[j];
+  return isfinite(fm) && isfinite(fr);
+}
+
+template <class S>
+bool MidRadEvaluator<S>::gradientSpread(std::span<const S> radius, std::span<S> spread) const {
+  if (!form_) return false;
+  const QuadraticForm& f = *form_;
+  const S up = S(1) + S(f.g0m.size() + 8) * u_;
+  for (std::size_t j = 0; j < spread.size(); ++j) spread[j] = 0;
+  for (std::size_t t = 0; t < f.hm.size(); ++t) spread[f.row[t]] += f.habs[t] * radius[f.column[t]];
+  for (std::size_t j = 0; j < spread.size(); ++j) spread[j] *= up;
+  return true;
+}
+
+template <class S>
+bool MidRadEvaluator<S>::runProgram(std::span<const S> centre, std::span<const S> radius,
+                                    bool gradient) const {
   using std::isfinite;
   stride_ = gradient ? static_cast<std::size_t>(tape_->dim()) + 1 : 1;
   centre_ = centre;
@@ -270,13 +390,8 @@ bool semidefiniteSlack(int n, const std::vector<double>& m, const std::vector<do
 
 Curvature quadraticCurvature(const std::shared_ptr<const Tape>& tape) {
   using std::abs;
-  if (!tape->leaves().empty() || tape->totalDegree(3) > 2) return {};
+  if (!tape->leaves().empty() || tape->totalDegree(3) != 2) return {};
   const int n = tape->dim();
-  Curvature out;
-  if (tape->totalDegree(3) < 2) {  // affine: H = 0
-    out.magnitude.assign(std::size_t(n) * std::size_t(n), 0.0);
-    return out;
-  }
   const double eps = ScalarTraits<double>::epsilon();
   MidRadEvaluator<double> e(tape);
   const auto size = static_cast<std::size_t>(n);
@@ -304,40 +419,13 @@ Curvature quadraticCurvature(const std::shared_ptr<const Tape>& tape) {
       m[jk] = (hm[jk] + hm[kj]) / 2;
       radius[jk] = (hr[jk] + abs(hm[jk] - m[jk]) + eps * abs(m[jk])) * (1 + 4 * eps);
     }
-  out.magnitude.resize(m.size());
-  for (std::size_t jk = 0; jk < m.size(); ++jk)
-    out.magnitude[jk] = (abs(m[jk]) + radius[jk]) * (1 + 4 * eps);
   for (int sign : {1, -1}) {
     std::vector<double> signed_ = m;
     for (double& v : signed_) v *= sign;
     double slack = 0;
-    if (semidefiniteSlack(n, signed_, radius, slack)) {
-      out.sign = sign;
-      out.slack = slack;
-      break;
-    }
+    if (semidefiniteSlack(n, signed_, radius, slack)) return {sign, slack};
   }
-  return out;
-}
-
-template <class S>
-bool MidRadEvaluator<S>::gradientSpread(std::span<const S> radius, std::span<S> spread) const {
-  if constexpr (!std::is_same_v<S, double>) {
-    return false;
-  } else {
-    if (!gradientAffine_) return false;
-    const std::vector<double>& magnitude = curvature().magnitude;
-    const std::size_t n = radius.size();
-    if (magnitude.size() != n * n) return false;
-    // n nonnegative products summed: gamma_n relative, and underflow below the smallest normal.
-    const double up = 1 + double(4 * (n + 4)) * ScalarTraits<double>::epsilon();
-    for (std::size_t j = 0; j < n; ++j) {
-      double sum = 0;
-      for (std::size_t l = 0; l < n; ++l) sum += magnitude[j * n + l] * radius[l];
-      spread[j] = sum * up + std::numeric_limits<double>::min();
-    }
-    return true;
-  }
+  return {};
 }
 
 template class MidRadEvaluator<double>;

@@ -2,6 +2,7 @@
 /// Evaluation of a Tape in midpoint-radius arithmetic, with or without the gradient.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <span>
@@ -20,9 +21,6 @@ struct Curvature {
   /// 0: neither is proven (H indefinite, or the program is not a quadratic without leaves).
   int sign = 0;
   double slack = 0;  ///< rounded up; covers the rounding of H's enclosure and factorisation
-  /// For a program of total degree at most 2 without leaves, bounds of |H_jk| (n x n,
-  /// row-major, rounded up; zero for an affine one); empty for any other program.
-  std::vector<double> magnitude;
 };
 
 /// The curvature of `tape`, proven in double: H enclosed column by column from gradients
@@ -30,8 +28,7 @@ struct Curvature {
 /// +-H ~ L D L^T with D > 0 (stopped where the remaining pivots are below 1e-12 of the largest
 /// diagonal), so that d^T (+-H) d >= -sum_jk B_jk |d_j| |d_k| with B bounding H - L D L^T
 /// (the enclosure's radius, the symmetrisation and every rounding). Accepted when the slack is
-/// below 1e-8 of sum |H_jk|; otherwise sign 0. The enclosure's magnitudes are kept whatever the
-/// sign.
+/// below 1e-8 of sum |H_jk|; otherwise sign 0.
 Curvature quadraticCurvature(const std::shared_ptr<const Tape>& tape);
 
 /// The Taylor remainder d^T H d / 2 over |d_j| <= h_j as a centre and radius, from `bound` >=
@@ -57,6 +54,13 @@ void taylorRemainder(const Curvature& curvature, const S& bound, const S& hMax, 
 /// radius, so the result encloses the range as rigorously as outward-rounded intervals, without
 /// switching the rounding mode per operation. Underflow is ignored.
 ///
+/// A program of total degree at most 2 without leaves (gradientAffine) is run in its quadratic
+/// form F(c + d) = F(c) + G(c) . d + d^T H d / 2 with G(c) = g0 + H c, whose coefficients f0 =
+/// F(0), g0 and H are enclosed once, by runs of the program at 0 and at the unit vectors: a run
+/// then costs O(n + nonzeros of H) operations instead of a pass over the program with n + 1
+/// components per slot, and its enclosures are never wider than the pass's up to rounding (the
+/// range over the box is F(c) +- sum_j (|G_j| + (|H| h)_j / 2) h_j, the gradient's G +- |H| h).
+///
 /// The scratch is sized once: run() does not allocate, and an instance must not be shared
 /// between threads.
 template <class S>
@@ -70,6 +74,12 @@ class MidRadEvaluator {
   /// encloses 0 or the value is not finite.
   bool run(std::span<const S> centre, std::span<const S> radius, bool gradient) const;
 
+  /// run() as a pass over the program even where it has a quadratic form (which is built by
+  /// such passes); for tests and comparisons.
+  bool runProgram(std::span<const S> centre, std::span<const S> radius, bool gradient) const;
+  /// Whether run() uses the quadratic form.
+  bool quadraticForm() const { return form_.has_value(); }
+
   /// Midpoint and radius of the value (q = 0) or of the partial derivative along q - 1 (after
   /// a run with the gradient).
   const S& mid(int q) const { return stackMid_[static_cast<std::size_t>(q)]; }
@@ -80,10 +90,8 @@ class MidRadEvaluator {
   /// a gradient enclosed over c +- h has radius at least sum_l |H_jl| h_l along each axis j.
   bool gradientAffine() const { return gradientAffine_; }
   /// For a program whose gradient is affine, spread_j >= sum_l |H_jl| radius_l (rounded up):
-  /// what the gradient's range over centre +- radius adds to the gradient at the centre, from
-  /// the curvature's magnitudes, in O(n^2) instead of a run over the box. False (spread
-  /// untouched) for other programs and in MPFR (H is enclosed in double, from the program's
-  /// constants rounded to double).
+  /// what the gradient's range over centre +- radius adds to the gradient at the centre, in
+  /// O(nonzeros of H) instead of a run over the box. False (spread untouched) for other programs.
   bool gradientSpread(std::span<const S> radius, std::span<S> spread) const;
   /// quadraticCurvature of the program, computed on first use (then cached).
   const Curvature& curvature() const {
@@ -92,6 +100,19 @@ class MidRadEvaluator {
   }
 
  private:
+  /// F = f0 + g0 . x + x^T H x / 2, each coefficient as midpoint and radius; H as its nonzero
+  /// entries (j, l) in row order.
+  struct QuadraticForm {
+    S f0m, f0r;
+    std::vector<S> g0m, g0r;  // n
+    std::vector<std::uint32_t> row, column;
+    std::vector<S> hm, hr, habs;  // per nonzero of H; habs >= |H_jl| (rounded up)
+  };
+  /// run() in the quadratic form.
+  bool runForm(std::span<const S> centre, std::span<const S> radius, bool gradient) const;
+  /// The quadratic form from runs of the program at 0 and at the unit vectors; false when one
+  /// fails (then run() stays the pass).
+  bool buildForm();
   /// Pushes a constant, variable or leaf into slot (m, r).
   void pushOperand(const TapeOp& op, S* m, S* r) const;
   /// The enclosures of leaf i and its partials, once per run.
@@ -106,6 +127,8 @@ class MidRadEvaluator {
   std::vector<S> constMid_, constRad_;  // per constant
   S u_, up_;  // unit of the arithmetic (>= 2 x unit round-off) and 1 + 8 u
   bool gradientAffine_ = false;
+  std::optional<QuadraticForm> form_;             // gradientAffine_ programs
+  mutable std::vector<S> formG_, formMagnitude_;  // runForm's scratch: G(c)'s radii, |terms|
   mutable std::optional<Curvature> curvature_;
   // Per run: the stride (n + 1 or 1), the centre and radii, the stack ((n + 1) per slot) and
   // the enclosures of each distinct leaf ((n + 1) per leaf).
