@@ -206,9 +206,14 @@ TEMPLATE_TEST_CASE("Tape: the quadratic form encloses value and gradient, as tig
         text = "x0^2 - 3*x" + std::to_string(n - 1) + "*x" + std::to_string(n / 2) + " + 0.5";
       INFO("n = " << n << ": " << text);
       const Expression e = Expression::parse(text, names);
-      const ndc::MidRadEvaluator<S> evaluator(e.sharedTape());
-      REQUIRE(evaluator.quadraticForm());
+      // About 0, and about a point of the box's range (the domain's centre in the pipeline).
+      std::vector<S> origin(n);
+      for (S& o : origin) o = uniform<S>(rng, -2, 2);
+      const ndc::MidRadEvaluator<S> atZero(e.sharedTape());
+      const ndc::MidRadEvaluator<S> atOrigin(e.sharedTape(), std::span<const S>(origin));
       for (int trial = 0; trial < 12; ++trial) {
+        const ndc::MidRadEvaluator<S>& evaluator = trial % 2 ? atOrigin : atZero;
+        REQUIRE(evaluator.quadraticForm());
         std::vector<S> c(n), r(n);
         for (int j = 0; j < n; ++j) {
           c[j] = uniform<S>(rng, -2, 2);
@@ -253,6 +258,16 @@ TEMPLATE_TEST_CASE("Tape: the quadratic form encloses value and gradient, as tig
     }
   }
   CHECK(runs == 8 * 5 * 12);
+  // A sphere far from 0, about its domain's centre: the rounding stays at the scale of the
+  // values near it (about 0 the expanded terms are 1e6 and their rounding 1e-10, and H taken
+  // from gradients at 0, about 2000, would carry their rounding).
+  const std::vector<std::string> xy = {"x", "y"};
+  const Expression far = Expression::parse("(x - 1000)^2 + (y - 1000)^2 - 1", xy);
+  const std::vector<S> centre = {S(1000), S(1000)};
+  const ndc::MidRadEvaluator<S> evaluator(far.sharedTape(), std::span<const S>(centre));
+  const std::vector<S> p = {S(1000.6), S(1000.8)}, zero = {S(0), S(0)};
+  REQUIRE(evaluator.run(p, zero, true));
+  CHECK(evaluator.rad(0) < S(1e4) * eps);
 }
 
 TEMPLATE_TEST_CASE("Tape: the magnitude bound and its operation count", "[tape]", NDC_SCALARS) {

@@ -49,7 +49,7 @@ void toMidRad(const Interval<S>& v, const S& up, S& mid, S& rad) {
 }  // namespace
 
 template <class S>
-MidRadEvaluator<S>::MidRadEvaluator(std::shared_ptr<const Tape> tape)
+MidRadEvaluator<S>::MidRadEvaluator(std::shared_ptr<const Tape> tape, std::span<const S> origin)
     : tape_(std::move(tape)), u_(ScalarTraits<S>::epsilon()), up_(S(1) + 8 * u_) {
   for (const TapeConstant& c : tape_->constants()) {
     constMid_.emplace_back();
@@ -63,28 +63,37 @@ MidRadEvaluator<S>::MidRadEvaluator(std::shared_ptr<const Tape> tape)
   leafRad_ = leafMid_;
   leafDone_.assign(tape_->leaves().size(), 0);
   gradientAffine_ = tape_->leaves().empty() && tape_->totalDegree(3) <= 2;
-  if (gradientAffine_ && !buildForm()) form_.reset();
+  if (gradientAffine_ && !buildForm(origin)) form_.reset();
 }
 
 template <class S>
-bool MidRadEvaluator<S>::buildForm() {
-  // f0 = F(0) and g0 = grad F(0); column l of H = grad F(e_l) - g0 (the gradient is affine).
+bool MidRadEvaluator<S>::buildForm(std::span<const S> origin) {
+  // f_o = F(o) and g_o = grad F(o); column l of H = (grad F(o + delta e_l) - g_o) / delta (the
+  // gradient is affine), delta = (o_l + 1) - o_l as rounded, whose exact value lies within
+  // u |delta| / 2 of it: differences at o, where the program's terms are at the scale of F's
+  // variation, not at 0, where they cancel for a domain far from it.
   using std::abs;
   const auto n = static_cast<std::size_t>(tape_->dim());
-  std::vector<S> x(n, S(0)), zero(n, S(0));
+  std::vector<S> zero(n, S(0));
   QuadraticForm f;
-  if (!runProgram(x, zero, true)) return false;
+  f.origin.assign(n, S(0));
+  if (origin.size() == n) std::copy(origin.begin(), origin.end(), f.origin.begin());
+  if (!runProgram(f.origin, zero, true)) return false;
   f.f0m = stackMid_[0], f.f0r = stackRad_[0];
   f.g0m.assign(stackMid_.begin() + 1, stackMid_.begin() + 1 + long(n));
   f.g0r.assign(stackRad_.begin() + 1, stackRad_.begin() + 1 + long(n));
-  std::vector<S> hm(n * n), hr(n * n);
+  std::vector<S> x = f.origin, hm(n * n), hr(n * n);
   for (std::size_t l = 0; l < n; ++l) {
-    x[l] = 1;
+    x[l] = f.origin[l] + 1;
+    const S delta = x[l] - f.origin[l];
     if (!runProgram(x, zero, true)) return false;
-    x[l] = 0;
+    x[l] = f.origin[l];
     for (std::size_t j = 0; j < n; ++j) {
-      hm[j * n + l] = stackMid_[j + 1] - f.g0m[j];
-      hr[j * n + l] = (stackRad_[j + 1] + f.g0r[j] + u_ * abs(hm[j * n + l])) * up_;
+      const S diff = stackMid_[j + 1] - f.g0m[j];
+      const S diffRad = stackRad_[j + 1] + f.g0r[j] + u_ * abs(diff);
+      const S h = diff / delta;
+      hm[j * n + l] = h;
+      hr[j * n + l] = ((diffRad + u_ * abs(diff)) / (abs(delta) * (1 - u_)) + u_ * abs(h)) * up_;
     }
   }
   // H is symmetric: its midpoint, with |H_jl - mid| <= hr_jl + |hm_jl - mid|; exact zeros (a
@@ -105,6 +114,8 @@ bool MidRadEvaluator<S>::buildForm() {
   form_ = std::move(f);
   formG_.resize(n);
   formMagnitude_.resize(n);
+  formD_.resize(n);
+  formR_.resize(n);
   return true;
 }
 
@@ -125,7 +136,14 @@ bool MidRadEvaluator<S>::runForm(std::span<const S> centre, std::span<const S> r
   // Sums of up to n + 2 terms: gamma_(n+2) <= (n + 2) u (u >= 2 x unit round-off) of their
   // magnitudes, and the radii's own sums rounded up by `up`.
   const S gamma = S(n + 2) * u_, up = S(1) + S(n + 8) * u_;
-  // G(c) = g0 + H c into the gradient slots (midpoints) and formG_ (radii); the magnitudes of
+  // d = c - o, rounded: the exact c lies within u |d_j| of o + d, which widens the box.
+  std::vector<S>& d = formD_;
+  std::vector<S>& wr = formR_;
+  for (std::size_t j = 0; j < n; ++j) {
+    d[j] = centre[j] - f.origin[j];
+    wr[j] = f.origin[j] == 0 ? radius[j] : (radius[j] + u_ * abs(d[j])) * up_;
+  }
+  // G(c) = g_o + H d into the gradient slots (midpoints) and formG_ (radii); the magnitudes of
   // its terms go to the rounding bound.
   S* gm = &stackMid_[1];
   std::vector<S>& gr = formG_;
@@ -136,35 +154,35 @@ bool MidRadEvaluator<S>::runForm(std::span<const S> centre, std::span<const S> r
     mag[j] = abs(f.g0m[j]);
   }
   for (std::size_t t = 0; t < nonzeros; ++t) {
-    const S& c = centre[f.column[t]];
+    const S& c = d[f.column[t]];
     const S term = f.hm[t] * c;
     gm[f.row[t]] += term;
     gr[f.row[t]] += f.hr[t] * abs(c);
     mag[f.row[t]] += abs(term);
   }
   for (std::size_t j = 0; j < n; ++j) gr[j] = (gr[j] + gamma * mag[j]) * up;
-  // F(c) = f0 + sum_j c_j (g0_j + G_j) / 2.
+  // F(c) = f_o + sum_j d_j (g_o,j + G_j) / 2.
   S fm = f.f0m, fr = f.f0r, fmag = abs(f.f0m);
   for (std::size_t j = 0; j < n; ++j) {
     const S w = (f.g0m[j] + gm[j]) / 2;
-    const S wr = (f.g0r[j] + gr[j]) / 2 + u_ * abs(w);
-    const S term = centre[j] * w;
+    const S wr_j = (f.g0r[j] + gr[j]) / 2 + u_ * abs(w);
+    const S term = d[j] * w;
     fm += term;
-    fr += abs(centre[j]) * wr;
+    fr += abs(d[j]) * wr_j;
     fmag += abs(term);
   }
   fr = (fr + gamma * fmag) * up;
   // Over the box: F(c + d) = F(c) + G(c) . d + d^T H d / 2 and grad F(c + d) = G(c) + H d.
   bool wide = false;
-  for (std::size_t j = 0; j < n && !wide; ++j) wide = radius[j] != 0;
+  for (std::size_t j = 0; j < n && !wide; ++j) wide = wr[j] != 0;
   if (wide) {
     S* spread = &stackRad_[1];  // (|H| h)_j, then the gradient's radii
     for (std::size_t j = 0; j < n; ++j) spread[j] = 0;
-    for (std::size_t t = 0; t < nonzeros; ++t) spread[f.row[t]] += f.habs[t] * radius[f.column[t]];
+    for (std::size_t t = 0; t < nonzeros; ++t) spread[f.row[t]] += f.habs[t] * wr[f.column[t]];
     S reach = 0;
     for (std::size_t j = 0; j < n; ++j) {
       spread[j] *= up;
-      reach += (abs(gm[j]) + gr[j] + spread[j] / 2) * radius[j];
+      reach += (abs(gm[j]) + gr[j] + spread[j] / 2) * wr[j];
       gr[j] = (gr[j] + spread[j]) * up;
     }
     fr = (fr + reach * up) * up;

@@ -55,19 +55,23 @@ void taylorRemainder(const Curvature& curvature, const S& bound, const S& hMax, 
 /// switching the rounding mode per operation. Underflow is ignored.
 ///
 /// A program of total degree at most 2 without leaves (gradientAffine) is run in its quadratic
-/// form F(c + d) = F(c) + G(c) . d + d^T H d / 2 with G(c) = g0 + H c, whose coefficients f0 =
-/// F(0), g0 and H are enclosed once, by runs of the program at 0 and at the unit vectors: a run
-/// then costs O(n + nonzeros of H) operations instead of a pass over the program with n + 1
-/// components per slot, and its enclosures are never wider than the pass's up to rounding (the
-/// range over the box is F(c) +- sum_j (|G_j| + (|H| h)_j / 2) h_j, the gradient's G +- |H| h).
+/// form about an origin o (the domain's centre): F(c + d) = F(c) + G(c) . d + d^T H d / 2 with
+/// G(c) = g_o + H (c - o) and F(c) = f_o + (c - o) . (g_o + G(c)) / 2, whose coefficients
+/// f_o = F(o), g_o = grad F(o) and H are enclosed once, by passes over the program at o, at 0
+/// and at the unit vectors. A run then costs O(n + nonzeros of H) operations instead of a pass
+/// with n + 1 components per slot, and its enclosures are never wider than the pass's up to
+/// rounding (the range over the box is F(c) +- sum_j (|G_j| + (|H| h)_j / 2) h_j, the
+/// gradient's G +- |H| h); the origin keeps the rounding of the expanded terms at the scale of
+/// F's variation over the domain, wherever the domain lies.
 ///
 /// The scratch is sized once: run() does not allocate, and an instance must not be shared
 /// between threads.
 template <class S>
 class MidRadEvaluator {
  public:
-  /// Prepares the constants of `tape` as midpoint and radius.
-  explicit MidRadEvaluator(std::shared_ptr<const Tape> tape);
+  /// Prepares the constants of `tape` as midpoint and radius, and a quadratic program's form
+  /// about `origin` (n values; empty: 0).
+  explicit MidRadEvaluator(std::shared_ptr<const Tape> tape, std::span<const S> origin = {});
 
   /// Runs the program with variable j = centre[j] +- radius[j]. With `gradient` the result
   /// holds the value and the n partial derivatives, else the value only. False when a divisor
@@ -100,19 +104,20 @@ class MidRadEvaluator {
   }
 
  private:
-  /// F = f0 + g0 . x + x^T H x / 2, each coefficient as midpoint and radius; H as its nonzero
-  /// entries (j, l) in row order.
+  /// F = f_o + g_o . (x - o) + (x - o)^T H (x - o) / 2, each coefficient as midpoint and
+  /// radius; H as its nonzero entries (j, l) in row order.
   struct QuadraticForm {
-    S f0m, f0r;
-    std::vector<S> g0m, g0r;  // n
+    std::vector<S> origin;    // o (n)
+    S f0m, f0r;               // F(o)
+    std::vector<S> g0m, g0r;  // grad F(o) (n)
     std::vector<std::uint32_t> row, column;
     std::vector<S> hm, hr, habs;  // per nonzero of H; habs >= |H_jl| (rounded up)
   };
   /// run() in the quadratic form.
   bool runForm(std::span<const S> centre, std::span<const S> radius, bool gradient) const;
-  /// The quadratic form from runs of the program at 0 and at the unit vectors; false when one
-  /// fails (then run() stays the pass).
-  bool buildForm();
+  /// The quadratic form about `origin` from passes over the program; false when one fails
+  /// (then run() stays the pass).
+  bool buildForm(std::span<const S> origin);
   /// Pushes a constant, variable or leaf into slot (m, r).
   void pushOperand(const TapeOp& op, S* m, S* r) const;
   /// The enclosures of leaf i and its partials, once per run.
@@ -127,8 +132,9 @@ class MidRadEvaluator {
   std::vector<S> constMid_, constRad_;  // per constant
   S u_, up_;  // unit of the arithmetic (>= 2 x unit round-off) and 1 + 8 u
   bool gradientAffine_ = false;
-  std::optional<QuadraticForm> form_;             // gradientAffine_ programs
-  mutable std::vector<S> formG_, formMagnitude_;  // runForm's scratch: G(c)'s radii, |terms|
+  std::optional<QuadraticForm> form_;  // gradientAffine_ programs
+  // runForm's scratch: G(c)'s radii, |terms| per row, c - o and the radii widened by its rounding
+  mutable std::vector<S> formG_, formMagnitude_, formD_, formR_;
   mutable std::optional<Curvature> curvature_;
   // Per run: the stride (n + 1 or 1), the centre and radii, the stack ((n + 1) per slot) and
   // the enclosures of each distinct leaf ((n + 1) per leaf).

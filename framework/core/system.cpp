@@ -6,7 +6,10 @@
 namespace ndc {
 
 template <class S>
-System<S>::System(const Problem& problem) : n_(problem.n()), equations_(problem.equations) {}
+System<S>::System(const Problem& problem) : n_(problem.n()), equations_(problem.equations) {
+  const Box<S> domain = problem.domainAs<S>();
+  for (int j = 0; j < n_; ++j) origin_.push_back((domain.lo[j] + domain.hi[j]) / 2);
+}
 
 template <class S>
 void System<S>::evaluate(std::span<const S> x, std::span<S> f) const {

@@ -26,10 +26,14 @@ class System {
   /// max_i |F_i(x)|.
   S maxResidual(std::span<const S> x) const;
   const std::vector<Expression>& equations() const { return equations_; }
+  /// The centre of the problem's domain: the origin of the quadratic forms of its
+  /// midpoint-radius evaluators (MidRadEvaluator).
+  const std::vector<S>& origin() const { return origin_; }
 
  private:
   int n_ = 0;
   std::vector<Expression> equations_;
+  std::vector<S> origin_;
 };
 
 extern template class System<double>;

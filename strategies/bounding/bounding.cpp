@@ -168,8 +168,10 @@ LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& 
   // 8 (n + m + 8) eps >= 2 gamma_p for every dot product length p used below (eps = 2u).
   u_ = ScalarTraits<S>::epsilon();
   tol_ = S(8 * (n_ + m_ + 8)) * u_;
-  for (const Expression& e : problem.equations) evaluators_.emplace_back(e.sharedTape());
   c_.resize(n);
+  for (int j = 0; j < n_; ++j) c_[j] = (domain.lo[j] + domain.hi[j]) / 2;
+  for (const Expression& e : problem.equations)
+    evaluators_.emplace_back(e.sharedTape(), std::span<const S>(c_));
   spread_.resize(n);
   zero_.assign(n, S(0));
   system_.resize(n_, m_);

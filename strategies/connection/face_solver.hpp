@@ -50,16 +50,19 @@ std::vector<MidRadEvaluator<S>>& threadEvaluators(const System<S>& system) {
   thread_local std::vector<std::shared_ptr<const Tape>> tapes;
   thread_local unsigned bits = 0;
   thread_local std::vector<MidRadEvaluator<S>> evaluators;
+  thread_local std::vector<S> origin;
   const auto& equations = system.equations();
-  bool same = tapes.size() == equations.size() && bits == ScalarTraits<S>::precisionBits();
+  bool same = tapes.size() == equations.size() && bits == ScalarTraits<S>::precisionBits() &&
+              origin == system.origin();
   for (std::size_t i = 0; same && i < equations.size(); ++i)
     same = tapes[i].get() == equations[i].sharedTape().get();
   if (!same) {
     tapes.clear();
     evaluators.clear();
+    origin = system.origin();
     for (const Expression& e : equations) {
       tapes.push_back(e.sharedTape());
-      evaluators.emplace_back(e.sharedTape());
+      evaluators.emplace_back(e.sharedTape(), std::span<const S>(origin));
     }
     bits = ScalarTraits<S>::precisionBits();
   }
