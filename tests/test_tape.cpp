@@ -16,6 +16,8 @@
 #include "framework/core/expression.hpp"
 #include "framework/core/magnitude.hpp"
 #include "framework/core/midrad.hpp"
+#include "framework/core/problem.hpp"
+#include "framework/core/system.hpp"
 #include "framework/core/tape.hpp"
 #include "tests/test_support.hpp"
 
@@ -268,6 +270,68 @@ TEMPLATE_TEST_CASE("Tape: the quadratic form encloses value and gradient, as tig
   const std::vector<S> p = {S(1000.6), S(1000.8)}, zero = {S(0), S(0)};
   REQUIRE(evaluator.run(p, zero, true));
   CHECK(evaluator.rad(0) < S(1e4) * eps);
+}
+
+TEMPLATE_TEST_CASE("Tape: a system evaluates its quadratics in their form, as the programs do",
+                   "[tape]", NDC_SCALARS) {
+  // Generated systems in R^2..R^8 on domains about random centres (far from 0 for some): a sum
+  // of squares of random affine forms, a product of two, an affine form and a cubic (which keeps
+  // its program). System::evaluate must give the programs' values and gradients at random points
+  // of the domain up to rounding at the scale of the terms.
+  using S = TestType;
+  PrecisionScope<S> scope(160);
+  std::mt19937 rng(89);
+  const S eps = ndc::ScalarTraits<S>::epsilon();
+  for (int n = 2; n <= 8; ++n) {
+    std::vector<std::string> names;
+    for (int j = 0; j < n; ++j) names.push_back("x" + std::to_string(j));
+    const double shift = n % 3 == 0 ? 500 : 0;
+    std::vector<double> centre(n);
+    for (double& c : centre) c = shift + uniform<double>(rng, -2, 2);
+    const auto affine = [&]() {
+      std::ostringstream e;
+      e.precision(17);
+      double offset = 0;
+      e << "(";
+      for (int j = 0; j < n; ++j) {
+        const double a = uniform<double>(rng, -2, 2);
+        offset -= a * centre[j];
+        e << (j ? " + " : "") << "(" << a << ")*x" << j;
+      }
+      e << " + (" << offset + uniform<double>(rng, -1, 1) << "))";
+      return e.str();
+    };
+    ndc::Problem problem;
+    problem.variables = names;
+    for (int j = 0; j < n; ++j) {
+      problem.domain.lo.push_back(centre[j] - 1.5);
+      problem.domain.hi.push_back(centre[j] + 1.5);
+    }
+    problem.equations = {Expression::parse(affine() + "^2 + " + affine() + "^2 - 1", names),
+                         Expression::parse(affine() + "*" + affine(), names),
+                         Expression::parse(affine(), names),
+                         Expression::parse(affine() + "^3 - x0", names)};
+    const ndc::System<S> system(problem);
+    CHECK(system.quadraticForm(0));
+    CHECK(system.quadraticForm(1));
+    CHECK(system.quadraticForm(2));
+    CHECK_FALSE(system.quadraticForm(3));
+    const auto m = problem.equations.size();
+    for (int trial = 0; trial < 20; ++trial) {
+      std::vector<S> x(n), f(m), jac(m * n), g(n);
+      for (int j = 0; j < n; ++j) x[j] = S(centre[j]) + uniform<S>(rng, -1.5, 1.5);
+      system.evaluate(x, f, jac);
+      for (std::size_t i = 0; i < m; ++i) {
+        const S value = problem.equations[i].evaluate<S>(x, g);
+        // The terms' scale: the value and gradient of the affine factors are O(10) here.
+        using std::abs;
+        const S tolerance = S(1e4) * S(n) * eps * (1 + abs(value));
+        INFO("n = " << n << ", equation " << i << ", trial " << trial);
+        CHECK(abs(f[i] - value) <= tolerance);
+        for (int j = 0; j < n; ++j) CHECK(abs(jac[i * n + j] - g[j]) <= tolerance);
+      }
+    }
+  }
 }
 
 TEMPLATE_TEST_CASE("Tape: the magnitude bound and its operation count", "[tape]", NDC_SCALARS) {

@@ -2,6 +2,7 @@
 /// The constraint system F = (F_1..F_m) of a problem, evaluated with its Jacobian.
 #pragma once
 
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -13,6 +14,10 @@ namespace ndc {
 
 /// The m constraints in n variables of a problem, in scalar S, evaluated directly from their
 /// compiled programs (Tape) (not from the Bernstein form, so Newton sees the exact polynomials).
+/// A program of total degree at most 2 without leaves is evaluated in its quadratic form about
+/// the domain's centre o, F(x) = f + g . d + d^T H d / 2 with d = x - o (f, g and H taken from
+/// the program at o and o + e_l once): O(n + nonzeros of H) per value and gradient instead of a
+/// pass over the program with n + 1 components per operation; the same values up to rounding.
 template <class S>
 class System {
  public:
@@ -25,15 +30,28 @@ class System {
   void evaluate(std::span<const S> x, std::span<S> f, std::span<S> jacobian) const;
   /// max_i |F_i(x)|.
   S maxResidual(std::span<const S> x) const;
+  /// Whether equation i is evaluated in its quadratic form.
+  bool quadraticForm(int i) const { return !forms_[std::size_t(i)].g.empty(); }
   const std::vector<Expression>& equations() const { return equations_; }
   /// The centre of the problem's domain: the origin of the quadratic forms of its
   /// midpoint-radius evaluators (MidRadEvaluator).
   const std::vector<S>& origin() const { return origin_; }
 
  private:
+  /// A quadratic form (no g: the equation is not a quadratic).
+  struct Form {
+    S f;
+    std::vector<S> g;                        ///< n
+    std::vector<std::uint32_t> row, column;  ///< H's nonzeros in row order
+    std::vector<S> h;
+  };
+  /// F_i(x), and its gradient into `gradient` (n values) unless empty, in the quadratic form.
+  S evaluateForm(const Form& form, std::span<const S> x, std::span<S> gradient) const;
+
   int n_ = 0;
   std::vector<Expression> equations_;
   std::vector<S> origin_;
+  std::vector<Form> forms_;  ///< per equation
 };
 
 extern template class System<double>;
