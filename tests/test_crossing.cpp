@@ -112,6 +112,23 @@ double lineDepth(const Eigen::MatrixXd& a, const std::vector<double>& p,
   return depth((s0 + s1) / 2);
 }
 
+/// A generated 2-flat in R^n: n - 2 hyperplanes with small integer coefficients (rows of `a`)
+/// through a point p of the 1/64 grid (every literal exact), and their evaluators.
+template <class S>
+struct FlatSystem {
+  std::vector<double> p;
+  Eigen::MatrixXd a;
+  std::vector<ndc::Expression> equations;
+  std::vector<ndc::MidRadEvaluator<S>> evaluators;
+
+  FlatSystem(int n, std::mt19937& rng) : p(n) {
+    std::uniform_int_distribution<int> grid(-64, 64);
+    for (int j = 0; j < n; ++j) p[j] = grid(rng) / 64.0;
+    planesThrough(p, n - 2, rng, variableNames(n), equations, &a);
+    for (const ndc::Expression& e : equations) evaluators.emplace_back(e.sharedTape());
+  }
+};
+
 using ndc::Problem;
 using ndc::RunResult;
 using ndc::Settings;
@@ -366,21 +383,16 @@ TEMPLATE_TEST_CASE("crossing: the Krawczyk test of a leaf's faces decides linear
   ndc::test::PrecisionScope<TestType> scope(128);
   using S = TestType;
   std::mt19937 rng(29);
-  std::uniform_int_distribution<int> grid(-64, 64);
   std::uniform_real_distribution<double> unit(0, 1);
   int outside = 0, inside = 0, onlyJointly = 0;
   for (int n = 3; n <= 8; ++n) {
     const int m = n - 2;
     for (int system = 0; system < 6; ++system) {
-      const std::vector<std::string> names = variableNames(n);
-      std::vector<double> p(n);
-      for (int j = 0; j < n; ++j) p[j] = grid(rng) / 64.0;
-      Eigen::MatrixXd a;
-      std::vector<ndc::Expression> equations;
-      planesThrough(p, m, rng, names, equations, &a);
-      std::vector<ndc::MidRadEvaluator<S>> evaluators;
-      for (const ndc::Expression& e : equations) evaluators.emplace_back(e.sharedTape());
-      const std::vector<S> level(equations.size(), S(0));
+      FlatSystem<S> flat(n, rng);
+      const std::vector<double>& p = flat.p;
+      const Eigen::MatrixXd& a = flat.a;
+      auto& evaluators = flat.evaluators;
+      const std::vector<S> level(flat.equations.size(), S(0));
       ndc::LeafModel<S> model;
       ndc::FacePreconditioner<S> pre;
       for (int trial = 0; trial < 40; ++trial) {
@@ -448,22 +460,16 @@ TEMPLATE_TEST_CASE("crossing: a leaf model's facets decide linear systems", "[cr
   ndc::test::PrecisionScope<TestType> scope(128);
   using S = TestType;
   std::mt19937 rng(31);
-  std::uniform_int_distribution<int> grid(-64, 64);
   std::uniform_real_distribution<double> unit(0, 1);
   int missed = 0, met = 0, emptyLeaves = 0;
   for (int n = 3; n <= 8; ++n) {
-    const int m = n - 2;
     for (int system = 0; system < 6; ++system) {
-      const std::vector<std::string> names = variableNames(n);
-      std::vector<double> p(n);
-      for (int j = 0; j < n; ++j) p[j] = grid(rng) / 64.0;
-      Eigen::MatrixXd a;
-      std::vector<ndc::Expression> equations;
-      planesThrough(p, m, rng, names, equations, &a);
-      if (Eigen::FullPivLU<Eigen::MatrixXd>(a).rank() < m) continue;
-      std::vector<ndc::MidRadEvaluator<S>> evaluators;
-      for (const ndc::Expression& e : equations) evaluators.emplace_back(e.sharedTape());
-      const std::vector<S> level(equations.size(), S(0));
+      FlatSystem<S> flat(n, rng);
+      const std::vector<double>& p = flat.p;
+      const Eigen::MatrixXd& a = flat.a;
+      if (Eigen::FullPivLU<Eigen::MatrixXd>(a).rank() < n - 2) continue;
+      auto& evaluators = flat.evaluators;
+      const std::vector<S> level(flat.equations.size(), S(0));
       ndc::LeafModel<S> model;
       ndc::LinearisedSystem<S> linearised;
       std::vector<char> facets;

@@ -36,6 +36,29 @@ using ndc::test::uniform;
 
 const std::vector<std::string> kXyz = {"x", "y", "z"};
 
+/// Variable names x0..x(n-1).
+std::vector<std::string> names(int n) {
+  std::vector<std::string> out;
+  for (int j = 0; j < n; ++j) out.push_back("x" + std::to_string(j));
+  return out;
+}
+
+/// A random affine form in x0..x(n-1), parenthesised: coefficients in [-2, 2], its value at
+/// `centre` (0 if empty) in [-1, 1].
+std::string randomAffine(int n, std::mt19937& rng, const std::vector<double>& centre = {}) {
+  std::ostringstream e;
+  e.precision(17);
+  double offset = 0;
+  e << "(";
+  for (int j = 0; j < n; ++j) {
+    const double a = uniform<double>(rng, -2, 2);
+    if (!centre.empty()) offset -= a * centre[j];
+    e << (j ? " + " : "") << "(" << a << ")*x" << j;
+  }
+  e << " + (" << offset + uniform<double>(rng, -1, 1) << "))";
+  return e.str();
+}
+
 // A piecewise leaf in (x, z): two pieces along x (breaks -1, 0, 1), degree 2 x 1.
 std::shared_ptr<const ndc::PiecewiseBernstein> makeLeaf() {
   auto leaf = std::make_shared<ndc::PiecewiseBernstein>();
@@ -187,17 +210,7 @@ TEMPLATE_TEST_CASE("Tape: the quadratic form encloses value and gradient, as tig
   const S eps = ndc::ScalarTraits<S>::epsilon();
   int runs = 0;
   for (int n = 1; n <= 8; ++n) {
-    std::vector<std::string> names;
-    for (int j = 0; j < n; ++j) names.push_back("x" + std::to_string(j));
-    const auto affine = [&]() {
-      std::ostringstream e;
-      e.precision(17);
-      e << "(";
-      for (int j = 0; j < n; ++j)
-        e << (j ? " + " : "") << "(" << uniform<double>(rng, -2, 2) << ")*x" << j;
-      e << " + (" << uniform<double>(rng, -1, 1) << "))";
-      return e.str();
-    };
+    const auto affine = [&]() { return randomAffine(n, rng); };
     for (int kind = 0; kind < 5; ++kind) {
       std::string text;
       if (kind == 0) text = affine() + "^2 + " + affine() + "^2 - 1";
@@ -207,7 +220,7 @@ TEMPLATE_TEST_CASE("Tape: the quadratic form encloses value and gradient, as tig
       if (kind == 4)
         text = "x0^2 - 3*x" + std::to_string(n - 1) + "*x" + std::to_string(n / 2) + " + 0.5";
       INFO("n = " << n << ": " << text);
-      const Expression e = Expression::parse(text, names);
+      const Expression e = Expression::parse(text, names(n));
       // About 0, and about a point of the box's range (the domain's centre in the pipeline).
       std::vector<S> origin(n);
       for (S& o : origin) o = uniform<S>(rng, -2, 2);
@@ -283,34 +296,21 @@ TEMPLATE_TEST_CASE("Tape: a system evaluates its quadratics in their form, as th
   std::mt19937 rng(89);
   const S eps = ndc::ScalarTraits<S>::epsilon();
   for (int n = 2; n <= 8; ++n) {
-    std::vector<std::string> names;
-    for (int j = 0; j < n; ++j) names.push_back("x" + std::to_string(j));
+    const std::vector<std::string> variables = names(n);
     const double shift = n % 3 == 0 ? 500 : 0;
     std::vector<double> centre(n);
     for (double& c : centre) c = shift + uniform<double>(rng, -2, 2);
-    const auto affine = [&]() {
-      std::ostringstream e;
-      e.precision(17);
-      double offset = 0;
-      e << "(";
-      for (int j = 0; j < n; ++j) {
-        const double a = uniform<double>(rng, -2, 2);
-        offset -= a * centre[j];
-        e << (j ? " + " : "") << "(" << a << ")*x" << j;
-      }
-      e << " + (" << offset + uniform<double>(rng, -1, 1) << "))";
-      return e.str();
-    };
+    const auto affine = [&]() { return randomAffine(n, rng, centre); };
     ndc::Problem problem;
-    problem.variables = names;
+    problem.variables = variables;
     for (int j = 0; j < n; ++j) {
       problem.domain.lo.push_back(centre[j] - 1.5);
       problem.domain.hi.push_back(centre[j] + 1.5);
     }
-    problem.equations = {Expression::parse(affine() + "^2 + " + affine() + "^2 - 1", names),
-                         Expression::parse(affine() + "*" + affine(), names),
-                         Expression::parse(affine(), names),
-                         Expression::parse(affine() + "^3 - x0", names)};
+    problem.equations = {Expression::parse(affine() + "^2 + " + affine() + "^2 - 1", variables),
+                         Expression::parse(affine() + "*" + affine(), variables),
+                         Expression::parse(affine(), variables),
+                         Expression::parse(affine() + "^3 - x0", variables)};
     const ndc::System<S> system(problem);
     CHECK(system.quadraticForm(0));
     CHECK(system.quadraticForm(1));
