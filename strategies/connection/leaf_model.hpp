@@ -41,8 +41,8 @@ void centreAndRadius(const Box<S>& box, std::vector<S>& centre, std::vector<S>& 
 /// lies in value_i + sum_j S_ij d_j for every c + d in X, with slopes S_ij in gradMid +- gradRad:
 /// J(X) by the mean value theorem, or, for an equation whose gradient is affine (total degree
 /// 2, MidRadEvaluator::gradientAffine), its Taylor form grad F_i(c) + H_i d / 2, enclosed by the
-/// gradient at c plus half the radius of J(X) (which is at least sum_l |H_jl| radius_l): half
-/// the mean-value form's spread. Where H_i is proven semidefinite (MidRadEvaluator::curvature)
+/// gradient at c plus half of sum_l |H_jl| radius_l (MidRadEvaluator::gradientSpread, the radius
+/// of J(X)): half the mean-value form's spread. Where H_i is proven semidefinite (MidRadEvaluator::curvature)
 /// the slopes are the gradient at c alone and the one-sided remainder d^T H_i d / 2 joins the
 /// value instead, half as wide again. Slopes, not derivatives, so the model proves only that a face
 /// holds no zero (faceExcluded, faceKrawczykExcludes), never that a zero is unique. It
