@@ -31,9 +31,12 @@ void LinearisedSystem<S>::resize(int n, int m) {
   b_.resize(nn);
   tlo_.resize(k);
   thi_.resize(k);
-  // 7c's polygons: 4 corners, at most one vertex more per clip, 2 n clips.
-  polygon_.reserve(2 * (4 + 2 * nn));
-  clipped_.reserve(2 * (4 + 2 * nn));
+  witness_.reserve(k);
+  // The polygons of 7c and solvesInside: 4 corners, at most one vertex more per clip, up to
+  // 4 n clips (clip swaps the buffers, so each gets the largest size).
+  polygon_.reserve(2 * (4 + 4 * nn));
+  clipped_.reserve(2 * (4 + 4 * nn));
+  tight_.reserve(2 * (4 + 4 * nn));
 }
 
 template <class S>
@@ -46,18 +49,63 @@ bool LinearisedSystem<S>::excludes(const S& hh, int multiplierSteps) {
   kernelBounds();                                // 7
   if (kernelPropagationExcludes()) return true;
   if (n_ - m_ == 2 && kernelPolygonExcludes()) return true;
-  // 8, unless d = -J^+ mu solves the linearised system well inside the box: then no
-  // multipliers exist (Farkas), and the boxes around M, where this holds, skip the search.
-  return !centreSolvesInside() && multiplierExcludes(multiplierSteps);
+  // 8, unless a d found by steps 7b and 7c solves the linearised system with mid G well inside
+  // the box: then no multipliers exist (Farkas), and the boxes around M skip the search.
+  return !solvesInside() && multiplierExcludes(multiplierSteps);
 }
 
 template <class S>
-bool LinearisedSystem<S>::centreSolvesInside() const {
+bool LinearisedSystem<S>::solvesInside() {
+  // d = N t - a for t = 0 (d = -J^+ mid G), else for a point of the region of t whose d lies
+  // in the box shrunk by the margin: the strips |(N t)_j - a_j| <= h_j (1 - 1e-6) cut out of
+  // what steps 7b and 7c left (the centre of the interval for k = 1, the mean of the
+  // polygon's vertices for k = 2, the centre of the t box for k > 2, untightened).
   using std::abs;
+  const int n = n_, k = n_ - m_;
   const S inside = S(1) - S(1e-6);
-  for (int j = 0; j < n_; ++j)
-    if (!(abs(a_[j]) < h[j] * inside)) return false;
-  return true;
+  const auto insideAt = [&](const S* t) {
+    for (int j = 0; j < n; ++j) {
+      S d = -a_[j];
+      for (int p = 0; p < k && t; ++p) d += nul(j, p) * t[p];
+      if (!(abs(d) < h[j] * inside)) return false;
+    }
+    return true;
+  };
+  if (insideAt(nullptr)) return true;
+  if (k == 0) return false;
+  witness_.assign(static_cast<std::size_t>(k), S(0));
+  if (k == 1) {
+    S lo = tlo_[0], hi = thi_[0];
+    for (int j = 0; j < n && lo <= hi; ++j) {
+      const S& u = nul(j, 0);
+      if (u == 0) continue;
+      const S a = (a_[j] - h[j] * inside) / u, b = (a_[j] + h[j] * inside) / u;
+      lo = std::max(lo, std::min(a, b));
+      hi = std::min(hi, std::max(a, b));
+    }
+    if (!(lo <= hi)) return false;
+    witness_[0] = (lo + hi) / 2;
+  } else if (k == 2) {
+    tight_ = polygon_;
+    for (int j = 0; j < n; ++j) {
+      const S& u0 = nul(j, 0);
+      const S& u1 = nul(j, 1);
+      if (u0 == 0 && u1 == 0) continue;
+      if (!clip(tight_, u0, u1, a_[j] + h[j] * inside) ||
+          !clip(tight_, -u0, -u1, h[j] * inside - a_[j]))
+        return false;
+    }
+    const std::size_t count = tight_.size() / 2;
+    for (std::size_t v = 0; v < count; ++v) {
+      witness_[0] += tight_[2 * v];
+      witness_[1] += tight_[2 * v + 1];
+    }
+    witness_[0] /= S(count);
+    witness_[1] /= S(count);
+  } else {
+    for (int p = 0; p < k; ++p) witness_[std::size_t(p)] = (tlo_[p] + thi_[p]) / 2;
+  }
+  return insideAt(witness_.data());
 }
 
 template <class S>
@@ -307,34 +355,38 @@ bool LinearisedSystem<S>::kernelPolygonExcludes() {
   const S& tol = tol_;
   const S reach = std::max({abs(tlo_[0]), abs(thi_[0]), abs(tlo_[1]), abs(thi_[1])});
   polygon_ = {tlo_[0], tlo_[1], thi_[0], tlo_[1], thi_[0], thi_[1], tlo_[0], thi_[1]};
-  // Keeps the part of the polygon where u . t <= bound.
-  const auto clip = [&](const S& u0, const S& u1, const S& bound) {
-    clipped_.clear();
-    const std::size_t count = polygon_.size() / 2;
-    for (std::size_t v = 0; v < count; ++v) {
-      const std::size_t w = (v + 1) % count;
-      const S& x0 = polygon_[2 * v];
-      const S& y0 = polygon_[2 * v + 1];
-      const S& x1 = polygon_[2 * w];
-      const S& y1 = polygon_[2 * w + 1];
-      const S s0 = u0 * x0 + u1 * y0 - bound, s1 = u0 * x1 + u1 * y1 - bound;
-      if (s0 <= 0) clipped_.insert(clipped_.end(), {x0, y0});
-      if ((s0 < 0 && s1 > 0) || (s0 > 0 && s1 < 0)) {
-        const S f = s0 / (s0 - s1);
-        clipped_.insert(clipped_.end(), {x0 + f * (x1 - x0), y0 + f * (y1 - y0)});
-      }
-    }
-    polygon_.swap(clipped_);
-    return !polygon_.empty();
-  };
   for (int j = 0; j < n; ++j) {
     const S& u0 = nul(j, 0);
     const S& u1 = nul(j, 1);
     if (u0 == 0 && u1 == 0) continue;  // decided by the propagation
     const S slack = 4 * tol * (abs(a_[j]) + b_[j] + (abs(u0) + abs(u1)) * reach);
-    if (!clip(u0, u1, a_[j] + b_[j] + slack) || !clip(-u0, -u1, b_[j] - a_[j] + slack)) return true;
+    if (!clip(polygon_, u0, u1, a_[j] + b_[j] + slack) ||
+        !clip(polygon_, -u0, -u1, b_[j] - a_[j] + slack))
+      return true;
   }
   return false;
+}
+
+template <class S>
+bool LinearisedSystem<S>::clip(std::vector<S>& polygon, const S& u0, const S& u1, const S& bound) {
+  // Sutherland-Hodgman against one half-plane, through clipped_.
+  clipped_.clear();
+  const std::size_t count = polygon.size() / 2;
+  for (std::size_t v = 0; v < count; ++v) {
+    const std::size_t w = (v + 1) % count;
+    const S& x0 = polygon[2 * v];
+    const S& y0 = polygon[2 * v + 1];
+    const S& x1 = polygon[2 * w];
+    const S& y1 = polygon[2 * w + 1];
+    const S s0 = u0 * x0 + u1 * y0 - bound, s1 = u0 * x1 + u1 * y1 - bound;
+    if (s0 <= 0) clipped_.insert(clipped_.end(), {x0, y0});
+    if ((s0 < 0 && s1 > 0) || (s0 > 0 && s1 < 0)) {
+      const S f = s0 / (s0 - s1);
+      clipped_.insert(clipped_.end(), {x0 + f * (x1 - x0), y0 + f * (y1 - y0)});
+    }
+  }
+  polygon.swap(clipped_);
+  return !polygon.empty();
 }
 
 template <class S>

@@ -76,12 +76,18 @@ class LinearisedSystem {
   /// half-planes of the axes' strips (its vertices left in polygon_); true when nothing is
   /// left.
   bool kernelPolygonExcludes();
+  /// Keeps the part of `polygon` (vertices (t_0, t_1) interleaved) where u . t <= bound
+  /// (Sutherland-Hodgman); false when nothing is left.
+  bool clip(std::vector<S>& polygon, const S& u0, const S& u1, const S& bound);
   /// 8: the multiplier test (reweighted least squares for y); true when some y excludes.
   bool multiplierExcludes(int steps);
-  /// True when d = -J^+ mid G (step 7's centres a_) lies inside the box by a relative 1e-6 on
-  /// every axis: it solves J_c d = -mid G, so the linearised system is solvable, no multipliers
-  /// exist, and step 8 is skipped (a heuristic only in that skipping never discards a box).
-  bool centreSolvesInside() const;
+  /// True when some d = N t - J^+ mid G lies inside the box by a relative 1e-6 on every axis:
+  /// t = 0 (d = -J^+ mid G), else a point of the region of t where every |d_j| is below
+  /// h_j (1 - 1e-6) (an interval for k = 1, a polygon clipped from step 7c's for k = 2; the
+  /// centre of the t box for k > 2). Such a d solves J_c d = -mid G up to rounding, so the
+  /// linearised system is solvable, no multipliers exist, and step 8 is skipped (a heuristic
+  /// only in that skipping never discards a box).
+  bool solvesInside();
   /// Q1 (row space of J_c) and N = Q2 (its kernel) as n x m and n x k matrices.
   const S& q1(int row, int col) const {
     return q_[static_cast<std::size_t>(col) * static_cast<std::size_t>(n_) +
@@ -97,6 +103,7 @@ class LinearisedSystem {
   std::vector<S> p_, pj_, pjAbs_, mig_;      // P (m x m), P J_c and |P| |J_c| (m x n)
   std::vector<S> pinv_, a_, b_, tlo_, thi_;  // J^+ (n x m), centre/bound per axis, t box
   std::vector<S> polygon_, clipped_;         // 7c: vertices (t_0, t_1) interleaved
+  std::vector<S> witness_, tight_;           // solvesInside's t (k) and polygon
   MultiplierTest<S> multipliers_;            // 8
 };
 
