@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "framework/core/expression.hpp"
+#include "framework/core/iteration.hpp"
 #include "framework/core/magnitude.hpp"
 #include "framework/core/midrad.hpp"
 #include "framework/core/problem.hpp"
@@ -329,6 +330,36 @@ TEMPLATE_TEST_CASE("Tape: a system evaluates its quadratics in their form, as th
         INFO("n = " << n << ", equation " << i << ", trial " << trial);
         CHECK(abs(f[i] - value) <= tolerance);
         for (int j = 0; j < n; ++j) CHECK(abs(jac[i * n + j] - g[j]) <= tolerance);
+      }
+      // The Hessian's bounds against the programs' gradients at x and a second point y:
+      // |G_j(x) - G_j(y)| <= (|H| |x - y|)_j and |G(x) - G(y)|_2 <= |H|_F |x - y|_2.
+      using std::abs;
+      std::vector<S> y(n), gy(n), h(n), spread(n);
+      S distance2 = 0;
+      for (int j = 0; j < n; ++j) {
+        y[j] = S(centre[j]) + uniform<S>(rng, -1.5, 1.5);
+        h[j] = abs(x[j] - y[j]);
+        distance2 += h[j] * h[j];
+      }
+      for (std::size_t i = 0; i < m; ++i) {
+        const int row = static_cast<int>(i);
+        if (!system.quadraticForm(row)) {
+          CHECK_FALSE(system.hessianSpread(row, h, spread));
+          CHECK(system.hessianNorm(row) == S(-1));
+          continue;
+        }
+        REQUIRE(system.hessianSpread(row, h, spread));
+        problem.equations[i].evaluate<S>(x, g);
+        problem.equations[i].evaluate<S>(y, gy);
+        const S tolerance = S(1e4) * S(n) * eps * (1 + ndc::normInf<S>(g) + ndc::normInf<S>(gy));
+        S moved2 = 0;
+        for (int j = 0; j < n; ++j) {
+          CHECK(abs(g[j] - gy[j]) <= spread[j] + tolerance);
+          moved2 += (g[j] - gy[j]) * (g[j] - gy[j]);
+        }
+        using std::sqrt;
+        CHECK(sqrt(moved2) <= system.hessianNorm(row) * sqrt(distance2) + tolerance);
+        if (i == 2) CHECK(system.hessianNorm(row) == S(0));  // the affine form
       }
     }
   }

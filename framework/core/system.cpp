@@ -79,6 +79,27 @@ void System<S>::evaluate(std::span<const S> x, std::span<S> f, std::span<S> jaco
 }
 
 template <class S>
+bool System<S>::hessianSpread(int i, std::span<const S> h, std::span<S> spread) const {
+  using std::abs;
+  const Form& form = forms_[std::size_t(i)];
+  if (form.g.empty()) return false;
+  std::fill(spread.begin(), spread.end(), S(0));
+  for (std::size_t t = 0; t < form.h.size(); ++t)
+    spread[form.row[t]] += abs(form.h[t]) * h[form.column[t]];
+  return true;
+}
+
+template <class S>
+S System<S>::hessianNorm(int i) const {
+  using std::sqrt;
+  const Form& form = forms_[std::size_t(i)];
+  if (form.g.empty()) return S(-1);
+  S sum = 0;
+  for (const S& v : form.h) sum += v * v;
+  return sqrt(sum);
+}
+
+template <class S>
 S System<S>::maxResidual(std::span<const S> x) const {
   using std::abs;
   S worst = 0;

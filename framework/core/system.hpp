@@ -32,6 +32,12 @@ class System {
   S maxResidual(std::span<const S> x) const;
   /// Whether equation i is evaluated in its quadratic form.
   bool quadraticForm(int i) const { return !forms_[std::size_t(i)].g.empty(); }
+  /// For an equation in its quadratic form: (|H| h)_j into `spread` (n values), which bounds how
+  /// far dF_i/dx_j moves over a box of half-widths h; false (and nothing written) otherwise.
+  bool hessianSpread(int i, std::span<const S> h, std::span<S> spread) const;
+  /// For an equation in its quadratic form: the Frobenius norm of its Hessian H, a Lipschitz
+  /// constant of its gradient everywhere (0 for an affine equation); -1 otherwise.
+  S hessianNorm(int i) const;
   const std::vector<Expression>& equations() const { return equations_; }
   /// The centre of the problem's domain: the origin of the quadratic forms of its
   /// midpoint-radius evaluators (MidRadEvaluator).

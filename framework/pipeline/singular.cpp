@@ -36,12 +36,14 @@ std::pair<S, S> sigmaRange(const Matrix<S>& a) {
   return {v(v.size() - 1), v(0)};
 }
 
-/// The Bernstein data of one block of the grid at the block level (step 1).
+/// The data of one block of the grid at the block level (step 1). An equation in its quadratic
+/// form (System::quadraticForm) has no Bernstein form here: its Hessian is constant and its
+/// gradient affine, so both bounds come from the form itself.
 template <class S>
 struct Block {
-  std::vector<Bernstein<S>> forms;  ///< F_i on the block
+  std::vector<Bernstein<S>> forms;  ///< F_i on the block (a placeholder for a quadratic)
   std::vector<S> lipschitz;         ///< m: Frobenius bound of the Hessian of F_i on the block
-  std::vector<S> slope;             ///< m x n: largest |coefficient| of dF_i/dx_j on the block
+  std::vector<S> slope;             ///< m x n: largest |dF_i/dx_j| on the block (bounded)
 };
 
 /// A start that Gauss-Newton brought to a singular point.
@@ -94,10 +96,13 @@ class Search {
   SingularSearch run();
 
  private:
-  /// The Bernstein data of the block of `cell`, whose root forms are `root` (pure: blocks are
-  /// made in parallel).
+  /// The data of the block of `cell`, whose root forms are `root` (null when every equation is
+  /// in its quadratic form); pure: blocks are made in parallel.
   Block<S> makeBlock(std::span<const std::int32_t> cell,
-                     const std::vector<Bernstein<S>>& root) const;
+                     const std::vector<Bernstein<S>>* root) const;
+  /// Whether the system needs Bernstein forms here (some equation is not in its quadratic
+  /// form).
+  bool needsBernstein() const;
   const std::vector<Bernstein<S>>& rootFor(std::span<const std::int32_t> cell);
   CellKey blockKey(std::span<const std::int32_t> cell) const;
   /// Which test of step 1 excludes rank deficiency on `cell` (in `block`); the row norms of
@@ -160,8 +165,15 @@ const std::vector<Bernstein<S>>& Search<S>::rootFor(std::span<const std::int32_t
 }
 
 template <class S>
+bool Search<S>::needsBernstein() const {
+  for (int i = 0; i < m_; ++i)
+    if (!system_.quadraticForm(i)) return true;
+  return false;
+}
+
+template <class S>
 Block<S> Search<S>::makeBlock(std::span<const std::int32_t> cell,
-                              const std::vector<Bernstein<S>>& root) const {
+                              const std::vector<Bernstein<S>>* root) const {
   using std::abs;
   using std::max;
   using std::sqrt;
@@ -174,11 +186,26 @@ Block<S> Search<S>::makeBlock(std::span<const std::int32_t> cell,
     for (const S& c : p.coefficients()) worst = max<S>(worst, abs(c));
     return worst;
   };
+  // The quadratics' gradients at the block's centre, and its half-widths.
+  std::vector<S> centre(n_), half(n_), f(m_), jac(std::size_t(m_) * n_), spread(n_);
+  for (int j = 0; j < n_; ++j) {
+    centre[j] = (box.lo[j] + box.hi[j]) / 2;
+    half[j] = max<S>(box.hi[j] - centre[j], centre[j] - box.lo[j]);
+  }
+  system_.evaluate(centre, f, jac);
   Block<S> block;
   block.lipschitz.assign(m_, S(0));
   block.slope.assign(std::size_t(m_) * n_, S(0));
   for (int i = 0; i < m_; ++i) {
-    block.forms.push_back(root[i].restrict(box));
+    if (system_.hessianSpread(i, half, spread)) {
+      // |dF_i/dx_j| <= |G_j(c)| + (|H| h)_j on the block; |H|_F everywhere.
+      block.forms.emplace_back();
+      for (int j = 0; j < n_; ++j)
+        block.slope[std::size_t(i) * n_ + j] = abs(jac[std::size_t(i) * n_ + j]) + spread[j];
+      block.lipschitz[i] = system_.hessianNorm(i);
+      continue;
+    }
+    block.forms.push_back((*root)[i].restrict(box));
     S frobenius = 0;
     for (int j = 0; j < n_; ++j) {
       const Bernstein<S> dj = block.forms[i].derivative(j);
@@ -231,13 +258,19 @@ typename Search<S>::Exclusion Search<S>::excluded(std::span<const std::int32_t> 
   if (isFinite(sigmaMin) && sigmaMin > sqrt(lip2) * radius * (1 + relative) + absolute * sigmaMax)
     return Exclusion::kLipschitz;
 
-  // Test 2 (Weyl): J(x) in [A - R, A + R] entrywise, from the Bernstein form on the cell.
+  // Test 2 (Weyl): J(x) in [A - R, A + R] entrywise, from the Bernstein form on the cell, or
+  // for a quadratic from its affine gradient: G_j(c) +- (|H| h)_j.
   Matrix<S> mid(m_, n_), rad(m_, n_);
+  std::vector<S> half(n_), spread(n_);
+  for (int j = 0; j < n_; ++j) half[j] = std::max<S>(box.hi[j] - centre[j], centre[j] - box.lo[j]);
   S slope2 = 0;
   for (int i = 0; i < m_; ++i) {
-    const Bernstein<S> form = block.forms[i].restrict(box);
+    const bool quadratic = system_.hessianSpread(i, half, spread);
+    const Bernstein<S> form = quadratic ? Bernstein<S>() : block.forms[i].restrict(box);
     for (int j = 0; j < n_; ++j) {
-      const auto [lo, hi] = form.derivative(j).coefficientRange();
+      const S& g = jac[std::size_t(i) * n_ + j];
+      const auto [lo, hi] = quadratic ? std::pair<S, S>(g - spread[j], g + spread[j])
+                                      : form.derivative(j).coefficientRange();
       const S slope = block.slope[std::size_t(i) * n_ + j];
       // m = 1: a partial derivative of one strict sign on the cell proves grad F != 0.
       if (m_ == 1 && (lo > absolute * slope || hi < -absolute * slope))
@@ -426,6 +459,7 @@ std::vector<std::int32_t> Search<S>::findCandidates(SingularSearch& out) {
   // Step 1: candidate cells, where rank deficiency cannot be excluded. The blocks first, in
   // cell order (the root forms are made on first use), each block's data in parallel.
   const std::size_t count = cells_.size();
+  const bool bernstein = needsBernstein();
   std::vector<std::size_t> firsts;  // the first cell of each new block
   std::vector<const std::vector<Bernstein<S>>*> roots;
   CellSet pending;
@@ -433,11 +467,11 @@ std::vector<std::int32_t> Search<S>::findCandidates(SingularSearch& out) {
     const CellKey key = blockKey(cells_.cell(c));
     if (blocks_.count(key) || !pending.insert(key).second) continue;
     firsts.push_back(c);
-    roots.push_back(&rootFor(cells_.cell(c)));
+    roots.push_back(bernstein ? &rootFor(cells_.cell(c)) : nullptr);
   }
   std::vector<Block<S>> made(firsts.size());
   parallelFor(firsts.size(),
-              [&](std::size_t b) { made[b] = makeBlock(cells_.cell(firsts[b]), *roots[b]); });
+              [&](std::size_t b) { made[b] = makeBlock(cells_.cell(firsts[b]), roots[b]); });
   for (std::size_t b = 0; b < firsts.size(); ++b)
     blocks_.emplace(blockKey(cells_.cell(firsts[b])), std::move(made[b]));
   // Then the cells' tests in parallel, each into its slots, merged in cell order.
