@@ -1,6 +1,9 @@
 // Tests of the projection (minimum-norm Newton) and classification families.
 #include <catch2/catch.hpp>
 
+#include <boost/multiprecision/eigen.hpp>
+
+#include <Eigen/Dense>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -8,6 +11,7 @@
 #include <vector>
 
 #include "framework/core/iteration.hpp"
+#include "framework/core/minimum_norm.hpp"
 #include "framework/core/problem.hpp"
 #include "framework/core/system.hpp"
 #include "strategies/classification/classification.hpp"
@@ -59,6 +63,70 @@ std::vector<S> randomPoint(std::mt19937& rng, int n, double r) {
 }
 
 }  // namespace
+
+TEMPLATE_TEST_CASE("The minimum-norm solver against the pseudo-inverse", "[projection]",
+                   NDC_SCALARS) {
+  // Generated m x n systems (1 <= m <= n <= 9, rows of mixed scales): s solves J s = f to
+  // rounding and lies in J's row space (J^T y for the y of J J^T y = f, solved independently
+  // in 160 bits), so it is J^+ f. A row repeated, or a row that is a combination of the others,
+  // makes factor decline; rows that are mirror images give mirror-image steps.
+  using S = TestType;
+  ndc::test::PrecisionScope<S> scope(128);
+  const S eps = ndc::ScalarTraits<S>::epsilon();
+  std::mt19937 rng(1973);
+  ndc::MinimumNormSolver<S> solver;
+  const S threshold = S(8 * 9) * eps;
+  int solved = 0;
+  for (int n = 1; n <= 9; ++n)
+    for (int m = 1; m <= n; ++m)
+      for (int trial = 0; trial < 6; ++trial) {
+        std::vector<S> jac(std::size_t(m) * n), f(m), s(n);
+        for (int i = 0; i < m; ++i) {
+          const double scale = std::pow(10.0, ndc::test::uniform<double>(rng, -3, 3));
+          for (int j = 0; j < n; ++j)
+            jac[std::size_t(i) * n + j] = S(scale * ndc::test::uniform<double>(rng, -1, 1));
+          f[i] = S(ndc::test::uniform<double>(rng, -1, 1));
+        }
+        REQUIRE(solver.factor(jac.data(), m, n, threshold));
+        solver.solve(f.data(), s.data());
+        ++solved;
+        // The exact minimum-norm solution in 160 bits: s* = J^T y, (J J^T) y = f.
+        ndc::test::PrecisionScope<ndc::Mpfr> exact(160);
+        using Big = Eigen::Matrix<ndc::Mpfr, Eigen::Dynamic, Eigen::Dynamic>;
+        Big a(m, n), rhs(m, 1);
+        for (int i = 0; i < m; ++i) {
+          rhs(i, 0) = ndc::Mpfr(toDouble(f[i]));
+          for (int j = 0; j < n; ++j) a(i, j) = ndc::Mpfr(toDouble(jac[std::size_t(i) * n + j]));
+        }
+        const Big y = (a * a.transpose()).fullPivLu().solve(rhs);
+        const Big truth = a.transpose() * y;
+        // A solver of the minimum-norm problem that is stable for it errs by about
+        // eps kappa(J) |s| (kappa the ratio of J's extreme singular values).
+        const auto sigma = Eigen::JacobiSVD<Big>(a).singularValues();
+        const double kappa = toDouble(sigma(0)) / toDouble(sigma(m - 1));
+        double size = 0, error = 0;
+        for (int j = 0; j < n; ++j) {
+          size = std::max(size, std::abs(toDouble(truth(j, 0))));
+          error = std::max(error, std::abs(toDouble(truth(j, 0)) - toDouble(s[j])));
+        }
+        INFO("m = " << m << ", n = " << n << ", trial " << trial << ", kappa " << kappa);
+        CHECK(error <= 64 * n * toDouble(eps) * kappa * size);
+      }
+  CHECK(solved == 45 * 6);
+  // Rank deficiency: a repeated row, and the sum of two rows.
+  const std::vector<S> repeated = {S(1), S(2), S(3), S(1), S(2), S(3)};
+  CHECK_FALSE(solver.factor(repeated.data(), 2, 3, threshold));
+  const std::vector<S> summed = {S(1), S(0), S(2), S(0), S(1), S(-1), S(1), S(1), S(1)};
+  CHECK_FALSE(solver.factor(summed.data(), 3, 3, threshold));
+  // Mirror images: rows (a, a, 0, 0) and (0, 0, b, b) give s_0 = s_1 and s_2 = s_3 exactly.
+  const std::vector<S> mirrored = {S(0.7), S(0.7), S(0), S(0), S(0), S(0), S(1.3), S(1.3)};
+  const std::vector<S> f = {S(0.1), S(-0.3)};
+  std::vector<S> s(4);
+  REQUIRE(solver.factor(mirrored.data(), 2, 4, threshold));
+  solver.solve(f.data(), s.data());
+  CHECK(s[0] == s[1]);
+  CHECK(s[2] == s[3]);
+}
 
 TEMPLATE_TEST_CASE("Newton projects onto the circle and sphere radially", "[projection]",
                    NDC_SCALARS) {

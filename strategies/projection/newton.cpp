@@ -1,8 +1,5 @@
 #include "strategies/projection/newton.hpp"
 
-#include <boost/multiprecision/eigen.hpp>
-
-#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <optional>
@@ -11,6 +8,7 @@
 
 #include "framework/core/errors.hpp"
 #include "framework/core/iteration.hpp"
+#include "framework/core/minimum_norm.hpp"
 #include "framework/core/parallel.hpp"
 
 namespace ndc {
@@ -32,12 +30,8 @@ struct ToleranceWork {
 /// project's working storage (threadScratch): one projection allocates nothing once warm.
 template <class S>
 struct ProjectWork {
-  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
-  using Vector = Eigen::Matrix<S, Eigen::Dynamic, 1>;
-  std::vector<S> f, jacobian, tol;
-  Matrix jac;
-  Vector rhs, step;
-  Eigen::CompleteOrthogonalDecomposition<Matrix> cod;
+  std::vector<S> f, jacobian, tol, step;
+  MinimumNormSolver<S> solver;
 };
 
 }  // namespace
@@ -60,21 +54,15 @@ void NewtonProjection<S>::residualTolerance(std::span<const S> x, std::span<S> t
 template <class S>
 ProjectedPoint<S> NewtonProjection<S>::project(std::span<S> x) const {
   using std::abs;
-  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
-  using Vector = Eigen::Matrix<S, Eigen::Dynamic, 1>;
   const int n = system_->n(), m = system_->m();
   const S eps = ScalarTraits<S>::epsilon();
   const IterationGuard<S> guard{std::span<const S>(x)};
   std::optional<ProjectWork<S>> fresh;
   ProjectWork<S>& w = threadScratch<S, ProjectWork<S>>(fresh);
-  std::vector<S>&f = w.f, &jacobian = w.jacobian, &tol = w.tol;
-  f.resize(m), jacobian.resize(std::size_t(m) * n), tol.resize(m);
-  Matrix& jac = w.jac;
-  Vector& rhs = w.rhs;
-  jac.resize(m, n), rhs.resize(m);
-  Eigen::CompleteOrthogonalDecomposition<Matrix>& cod = w.cod;
-  // Relative rank threshold: singular values below 8 n eps of the largest count as zero.
-  cod.setThreshold(S(8 * n) * eps);
+  std::vector<S>&f = w.f, &jacobian = w.jacobian, &tol = w.tol, &step = w.step;
+  f.resize(m), jacobian.resize(std::size_t(m) * n), tol.resize(m), step.resize(n);
+  // Relative rank threshold: pivots at most 8 n eps of the first count as zero.
+  const S threshold = S(8 * n) * eps;
 
   // The componentwise tolerance plus the normwise one, 2 eps |x|_inf |grad F_i|_1: a
   // coordinate whose value at the root is 0 (M in a coordinate plane) otherwise never
@@ -104,20 +92,14 @@ ProjectedPoint<S> NewtonProjection<S>::project(std::span<S> x) const {
     if (it == maxIterations_) return result;
 
     //! [newton-step]
-    // Minimum-norm step s = J^+ F(x) from a rank-revealing decomposition of J.
-    for (int i = 0; i < m; ++i) {
-      rhs(i) = f[i];
-      for (int j = 0; j < n; ++j) jac(i, j) = jacobian[std::size_t(i) * n + j];
-    }
-    cod.compute(jac);
-    // A rank-deficient J has no minimum-norm Newton step that zeroes F.
-    if (cod.rank() < m) return result;
-    Vector& step = w.step;
-    step = cod.solve(rhs);
+    // Minimum-norm step s = J^+ F(x) from a pivoted QR of J^T. A rank-deficient J has no
+    // minimum-norm Newton step that zeroes F.
+    if (!w.solver.factor(jacobian.data(), m, n, threshold)) return result;
+    w.solver.solve(f.data(), step.data());
     S stepNorm = 0;
     for (int j = 0; j < n; ++j) {
-      x[j] -= step(j);
-      stepNorm = std::max<S>(stepNorm, abs(step(j)));
+      x[j] -= step[j];
+      stepNorm = std::max<S>(stepNorm, abs(step[j]));
     }
     result.iterations = it + 1;
     //! [newton-step]

@@ -25,10 +25,10 @@ namespace ndc {
 
 /// Minimum-norm Newton-Raphson onto M = {F = 0}:
 /// `x <- x - J^+ F(x)`, where `J^+ = J^T (J J^T)^{-1}` is the pseudo-inverse of the m x n
-/// Jacobian (full row rank). The step is computed with a complete orthogonal decomposition of
-/// J (rank revealing, and it never forms J J^T, so the conditioning is not squared). A
-/// rank-deficient J at an iterate whose residual has not yet converged ends the iteration as
-/// not converged.
+/// Jacobian (full row rank). The step is computed from a Householder QR of J^T with pivoting
+/// (ndc::MinimumNormSolver: rank revealing, and it never forms J J^T, so the conditioning is
+/// not squared). A rank-deficient J at an iterate whose residual has not yet converged ends the
+/// iteration as not converged.
 ///
 /// **Convergence criterion** (backward error at the working precision). For each equation
 /// `F_i`, let `|F_i|(|x|)` be its program evaluated with every constant and variable
