@@ -244,6 +244,26 @@ TEMPLATE_TEST_CASE("Tape: the quadratic form encloses value and gradient, as tig
         for (int q = 0; q <= n; ++q) passMid[q] = evaluator.mid(q), passRad[q] = evaluator.rad(q);
         std::vector<S> spread(n);
         REQUIRE(evaluator.gradientSpread(r, spread));
+        // runWithCentre: the numbers of run(c, r, true) and of run(c, 0, false) in one run; for
+        // a program (the quadratic times x0^2), those of its two passes.
+        const std::vector<S> zero(n, S(0));
+        const Expression cubic = Expression::parse("(" + text + ")*x0^2", names(n));
+        const ndc::MidRadEvaluator<S> program(cubic.sharedTape());
+        REQUIRE_FALSE(program.quadraticForm());
+        for (const ndc::MidRadEvaluator<S>* tested : {&evaluator, &program}) {
+          REQUIRE(tested->run(c, zero, false));
+          const S pointMid = tested->mid(0), pointRad = tested->rad(0);
+          REQUIRE(tested->run(c, r, true));
+          std::vector<S> boxMid(n + 1), boxRad(n + 1);
+          for (int q = 0; q <= n; ++q) boxMid[q] = tested->mid(q), boxRad[q] = tested->rad(q);
+          REQUIRE(tested->runWithCentre(c, r));
+          CHECK(tested->centreMid() == pointMid);
+          CHECK(tested->centreRad() == pointRad);
+          for (int q = 0; q <= n; ++q) {
+            CHECK(tested->mid(q) == boxMid[q]);
+            CHECK(tested->rad(q) == boxRad[q]);
+          }
+        }
         REQUIRE(evaluator.run(c, r, true));
         ++runs;
         for (int q = 0; q <= n; ++q) {

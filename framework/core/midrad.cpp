@@ -116,6 +116,8 @@ bool MidRadEvaluator<S>::buildForm(std::span<const S> origin) {
   formMagnitude_.resize(n);
   formD_.resize(n);
   formR_.resize(n);
+  formP_.resize(n);
+  formSpread_.resize(n);
   return true;
 }
 
@@ -172,25 +174,61 @@ bool MidRadEvaluator<S>::runForm(std::span<const S> centre, std::span<const S> r
     fmag += abs(term);
   }
   fr = (fr + gamma * fmag) * up;
-  // Over the box: F(c + d) = F(c) + G(c) . d + d^T H d / 2 and grad F(c + d) = G(c) + H d.
-  bool wide = false;
-  for (std::size_t j = 0; j < n && !wide; ++j) wide = wr[j] != 0;
-  if (wide) {
-    S* spread = &stackRad_[1];  // (|H| h)_j, then the gradient's radii
-    for (std::size_t j = 0; j < n; ++j) spread[j] = 0;
-    for (std::size_t t = 0; t < nonzeros; ++t) spread[f.row[t]] += f.habs[t] * wr[f.column[t]];
-    S reach = 0;
-    for (std::size_t j = 0; j < n; ++j) {
-      spread[j] *= up;
-      reach += (abs(gm[j]) + gr[j] + spread[j] / 2) * wr[j];
-      gr[j] = (gr[j] + spread[j]) * up;
-    }
-    fr = (fr + reach * up) * up;
+  // The value at the centre alone, as a run with radius 0 gives it: the box of d's rounding.
+  if (recordCentre_) {
+    std::vector<S>& wp = formP_;
+    for (std::size_t j = 0; j < n; ++j) wp[j] = f.origin[j] == 0 ? S(0) : (u_ * abs(d[j])) * up_;
+    centreMid_ = fm;
+    centreRad_ = fr;
+    widen(centreRad_, wp, formSpread_.data(), up);
   }
+  // Over the box, where the gradient's radii grow by the spread too.
+  S* spread = &stackRad_[1];
+  if (widen(fr, wr, spread, up))
+    for (std::size_t j = 0; j < n; ++j) gr[j] = (gr[j] + spread[j]) * up;
   stackMid_[0] = fm;
   stackRad_[0] = fr;
   for (std::size_t j = 0; gradient && j < n; ++j) stackRad_[j + 1] = gr[j];
   return isfinite(fm) && isfinite(fr);
+}
+
+template <class S>
+bool MidRadEvaluator<S>::widen(S& fr, std::span<const S> w, S* spread, const S& up) const {
+  // F(c + d) = F(c) + G(c) . d + d^T H d / 2 with |d_j| <= w_j: the value's radius grows by
+  // sum_j (|G_j| + (|H| w)_j / 2) w_j, G(c) in the gradient slots (midpoints) and formG_.
+  using std::abs;
+  const QuadraticForm& f = *form_;
+  const std::size_t n = f.g0m.size();
+  bool wide = false;
+  for (std::size_t j = 0; j < n && !wide; ++j) wide = w[j] != 0;
+  if (!wide) return false;
+  for (std::size_t j = 0; j < n; ++j) spread[j] = 0;
+  for (std::size_t t = 0; t < f.hm.size(); ++t) spread[f.row[t]] += f.habs[t] * w[f.column[t]];
+  const S* gm = &stackMid_[1];
+  S reach = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    spread[j] *= up;
+    reach += (abs(gm[j]) + formG_[j] + spread[j] / 2) * w[j];
+  }
+  fr = (fr + reach * up) * up;
+  return true;
+}
+
+template <class S>
+bool MidRadEvaluator<S>::runWithCentre(std::span<const S> centre, std::span<const S> radius) const {
+  if (form_) {
+    recordCentre_ = true;
+    const bool ok = runForm(centre, radius, true);
+    recordCentre_ = false;
+    using std::isfinite;
+    return ok && isfinite(centreMid_) && isfinite(centreRad_);
+  }
+  // A program: the pass at the centre first, then the one over the box.
+  zero_.assign(centre.size(), S(0));
+  if (!runProgram(centre, std::span<const S>(zero_), false)) return false;
+  centreMid_ = stackMid_[0];
+  centreRad_ = stackRad_[0];
+  return runProgram(centre, radius, true);
 }
 
 template <class S>

@@ -78,6 +78,14 @@ class MidRadEvaluator {
   /// encloses 0 or the value is not finite.
   bool run(std::span<const S> centre, std::span<const S> radius, bool gradient) const;
 
+  /// run() over the box with the gradient, and also the value at the centre alone (what
+  /// run(centre, 0, false) gives) into centreMid() and centreRad(): one run in a quadratic
+  /// form, two passes over a program. False when either fails.
+  bool runWithCentre(std::span<const S> centre, std::span<const S> radius) const;
+  /// The value at the centre from the last runWithCentre().
+  const S& centreMid() const { return centreMid_; }
+  const S& centreRad() const { return centreRad_; }
+
   /// run() as a pass over the program even where it has a quadratic form (which is built by
   /// such passes); for tests and comparisons.
   bool runProgram(std::span<const S> centre, std::span<const S> radius, bool gradient) const;
@@ -115,6 +123,10 @@ class MidRadEvaluator {
   };
   /// run() in the quadratic form.
   bool runForm(std::span<const S> centre, std::span<const S> radius, bool gradient) const;
+  /// Widens the value's radius `fr` at the centre to the box of half-widths w, with (|H| w)_j
+  /// rounded up left in `spread` (n); false, and nothing changed, when every w_j is 0. Needs
+  /// G(c) from runForm.
+  bool widen(S& fr, std::span<const S> w, S* spread, const S& up) const;
   /// The quadratic form about `origin` from passes over the program; false when one fails
   /// (then run() stays the pass).
   bool buildForm(std::span<const S> origin);
@@ -135,6 +147,11 @@ class MidRadEvaluator {
   std::optional<QuadraticForm> form_;  // gradientAffine_ programs
   // runForm's scratch: G(c)'s radii, |terms| per row, c - o and the radii widened by its rounding
   mutable std::vector<S> formG_, formMagnitude_, formD_, formR_;
+  // runWithCentre's: the half-widths of d's rounding and their spread, the centre's value,
+  // whether runForm records it, and the zero radii of a program's pass at the centre
+  mutable std::vector<S> formP_, formSpread_, zero_;
+  mutable S centreMid_, centreRad_;
+  mutable bool recordCentre_ = false;
   mutable std::optional<Curvature> curvature_;
   // Per run: the stride (n + 1 or 1), the centre and radii, the stack ((n + 1) per slot) and
   // the enclosures of each distinct leaf ((n + 1) per leaf).

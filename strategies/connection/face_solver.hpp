@@ -97,16 +97,14 @@ bool encloseSystem(std::vector<MidRadEvaluator<S>>& evaluators, std::span<const 
   using std::abs;
   const std::size_t m = evaluators.size(), width = columns.size();
   const S up = S(1) + S(8 * (centre.size() + m + 8)) * ScalarTraits<S>::epsilon();
-  thread_local std::vector<S> zero;
-  zero.assign(centre.size(), S(0));
   jacobian.resize(m * width);
   fy.resize(m);
   excluded = false;
   for (std::size_t i = 0; i < m; ++i) {
     MidRadEvaluator<S>& e = evaluators[i];
     const I c(level[i]);
-    // Over the box with the gradient: the value and J(X).
-    if (!e.run(centre, radius, true)) return false;
+    // Over the box with the gradient: the value and J(X); and the value at the centre.
+    if (!e.runWithCentre(centre, radius)) return false;
     const bool natural = !(enclosingInterval(e.mid(0), e.rad(0)) - c).containsZero();
     S spread = 0;  // sum_j mag J_ij(X) radius_j
     for (std::size_t j = 0; j < width; ++j) {
@@ -114,8 +112,7 @@ bool encloseSystem(std::vector<MidRadEvaluator<S>>& evaluators, std::span<const 
       jacobian[i * width + j] = enclosingInterval(e.mid(q), e.rad(q));
       spread += (abs(e.mid(q)) + e.rad(q)) * radius[columns[j]];
     }
-    if (!e.run(centre, std::span<const S>(zero), false)) return false;
-    fy[i] = enclosingInterval(e.mid(0), e.rad(0)) - c;
+    fy[i] = enclosingInterval(e.centreMid(), e.centreRad()) - c;
     const I meanValue = fy[i] + I(-spread * up, spread * up);
     excluded = excluded || natural || !meanValue.containsZero();
     if (excluded && stopWhenExcluded) return true;
