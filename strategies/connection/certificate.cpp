@@ -1,5 +1,6 @@
 #include "strategies/connection/certificate.hpp"
 
+#include "framework/core/iteration.hpp"
 #include "framework/core/parallel.hpp"
 
 #include <Eigen/Dense>
@@ -97,10 +98,48 @@ struct GraphWork {
 /// GraphTest::regularSquare's working storage (threadScratch).
 template <class S>
 struct SquareWork {
-  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
-  Matrix mid, inverse;
-  Eigen::FullPivLU<Matrix> lu;
+  std::vector<S> mid, inverse;  ///< m x m, column-major
 };
+
+/// Y ~ A^-1 for the m x m matrix `a` (column-major, overwritten) into `y` (column-major) by
+/// Gauss-Jordan elimination with partial pivoting; false when a pivot is 0, not finite, or at
+/// most m eps times the largest |entry| (A numerically singular). Y is only the
+/// preconditioner of the graph test, which checks ||I - Y A|| < 1 itself, so how Y is computed
+/// does not affect what the test proves.
+template <class S>
+bool invertMidpoint(int m, std::vector<S>& a, std::vector<S>& y) {
+  using std::abs;
+  const auto at = [m](std::vector<S>& v, int i, int j) -> S& {
+    return v[std::size_t(j) * std::size_t(m) + std::size_t(i)];
+  };
+  S largest = 0;
+  for (const S& v : a) largest = std::max<S>(largest, abs(v));
+  const S floor = S(m) * ScalarTraits<S>::epsilon() * largest;
+  y.assign(std::size_t(m) * std::size_t(m), S(0));
+  for (int i = 0; i < m; ++i) at(y, i, i) = 1;
+  for (int k = 0; k < m; ++k) {
+    int p = k;
+    for (int i = k + 1; i < m; ++i)
+      if (abs(at(a, i, k)) > abs(at(a, p, k))) p = i;
+    const S pivot = at(a, p, k);
+    if (!(abs(pivot) > floor) || !isFinite(pivot)) return false;
+    if (p != k)
+      for (int j = 0; j < m; ++j)
+        std::swap(at(a, p, j), at(a, k, j)), std::swap(at(y, p, j), at(y, k, j));
+    // Row k scaled to a unit pivot, then eliminated from every other row.
+    for (int j = 0; j < m; ++j) at(a, k, j) /= pivot, at(y, k, j) /= pivot;
+    for (int i = 0; i < m; ++i) {
+      if (i == k) continue;
+      const S factor = at(a, i, k);
+      if (factor == 0) continue;
+      for (int j = 0; j < m; ++j) {
+        at(a, i, j) -= factor * at(a, k, j);
+        at(y, i, j) -= factor * at(y, k, j);
+      }
+    }
+  }
+  return true;
+}
 
 }  // namespace
 
@@ -189,14 +228,12 @@ bool GraphTest<S>::regularSquare(int m, std::span<const Interval<S>> matrix, std
   std::optional<SquareWork<S>> fresh;
   SquareWork<S>& w = threadScratch<S, SquareWork<S>>(fresh);
   auto& mid = w.mid;
-  mid.resize(m, m);
+  mid.resize(std::size_t(m) * std::size_t(m));
   for (int i = 0; i < m; ++i) {
-    for (int t = 0; t < m; ++t) mid(i, t) = entry(i, t).midpoint();
+    for (int t = 0; t < m; ++t) mid[std::size_t(t) * m + i] = entry(i, t).midpoint();
   }
-  const auto& lu = w.lu.compute(mid);
-  if (lu.rank() < m) return false;
   auto& y = w.inverse;
-  y = lu.inverse();
+  if (!invertMidpoint(m, mid, y)) return false;
   // || I - Y A ||_inf < 1, every entry enclosed with outward rounding; in double, one kernel
   // with one rounding-mode switch (the same bounds; the switches were most of this test's time).
   if constexpr (std::is_same_v<S, double>) {
@@ -208,7 +245,7 @@ bool GraphTest<S>::regularSquare(int m, std::span<const Interval<S>> matrix, std
     I row(S(0));
     for (int j = 0; j < m; ++j) {
       I r(S(i == j ? 1 : 0));
-      for (int l = 0; l < m; ++l) r -= I(y(i, l)) * entry(l, j);
+      for (int l = 0; l < m; ++l) r -= I(y[std::size_t(l) * m + i]) * entry(l, j);
       using std::abs;
       row += I(std::max<S>(abs(r.lower()), abs(r.upper())));
     }
