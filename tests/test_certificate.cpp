@@ -17,6 +17,7 @@
 
 #include "framework/applications/load.hpp"
 #include "framework/core/interval.hpp"
+#include "framework/core/inverse.hpp"
 #include "framework/core/problem.hpp"
 #include "framework/core/system.hpp"
 #include "strategies/connection/certificate.hpp"
@@ -119,6 +120,53 @@ TEMPLATE_TEST_CASE(
   }
   CHECK(above > 0);
   CHECK(aboveExcluded == above);
+}
+
+TEMPLATE_TEST_CASE("The preconditioners' Gauss-Jordan inverse", "[certificate]", NDC_SCALARS) {
+  // Generated m x m matrices (m = 1..9): random, with rows of mixed scales, and with a zero
+  // leading entry (a pivot must be searched for): ||I - Y A||_inf stays at rounding level
+  // times the condition number. Singular ones (a repeated row, a zero column) are declined.
+  using S = TestType;
+  ndc::test::PrecisionScope<S> precision(128);
+  std::mt19937 rng(1928);
+  const S eps = ndc::ScalarTraits<S>::epsilon();
+  std::vector<S> a, copy, y;
+  for (int m = 1; m <= 9; ++m)
+    for (int trial = 0; trial < 8; ++trial) {
+      a.resize(std::size_t(m) * m);
+      for (int i = 0; i < m; ++i) {
+        const double scale = trial % 2 ? std::pow(10.0, ndc::test::uniform<double>(rng, -4, 4)) : 1;
+        for (int j = 0; j < m; ++j)
+          a[std::size_t(j) * m + i] = S(scale * ndc::test::uniform<double>(rng, -1, 1));
+      }
+      if (trial % 4 == 2 && m > 1) a[0] = 0;
+      copy = a;
+      REQUIRE(ndc::invertGaussJordan(m, copy, y));
+      // ||I - Y A||_inf, and kappa_inf = ||A|| ||Y|| as the scale it may reach.
+      using std::abs;
+      S residual = 0, normA = 0, normY = 0;
+      for (int i = 0; i < m; ++i) {
+        S row = 0, rowA = 0, rowY = 0;
+        for (int j = 0; j < m; ++j) {
+          S e = i == j ? S(1) : S(0);
+          for (int l = 0; l < m; ++l) e -= y[std::size_t(l) * m + i] * a[std::size_t(j) * m + l];
+          row += abs(e);
+          rowA += abs(a[std::size_t(j) * m + i]);
+          rowY += abs(y[std::size_t(j) * m + i]);
+        }
+        residual = std::max(residual, row);
+        normA = std::max(normA, rowA);
+        normY = std::max(normY, rowY);
+      }
+      INFO("m = " << m << ", trial " << trial);
+      CHECK(residual <= S(16 * m * m) * eps * normA * normY);
+    }
+  const std::vector<S> repeated = {S(1), S(2), S(1), S(2)};  // column-major: rows (1, 1), (2, 2)
+  copy = repeated;
+  CHECK_FALSE(ndc::invertGaussJordan(2, copy, y));
+  const std::vector<S> zeroColumn = {S(1), S(2), S(3), S(0), S(0), S(0), S(4), S(5), S(7)};
+  copy = zeroColumn;
+  CHECK_FALSE(ndc::invertGaussJordan(3, copy, y));
 }
 
 TEST_CASE("The one-switch ||I - Y A|| kernel equals per-operation interval arithmetic",

@@ -1,6 +1,6 @@
 #include "strategies/connection/certificate.hpp"
 
-#include "framework/core/iteration.hpp"
+#include "framework/core/inverse.hpp"
 #include "framework/core/parallel.hpp"
 
 #include <Eigen/Dense>
@@ -89,57 +89,53 @@ namespace {
 /// GraphTest::graph's working storage (threadScratch).
 template <class S>
 struct GraphWork {
-  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
-  Matrix mid;
-  Eigen::ColPivHouseholderQR<Matrix> qr;
-  std::vector<int> columns, pick;
+  std::vector<S> mid;  ///< m x a, column-major
+  std::vector<int> order, columns, pick;
 };
+
+/// The order in which a Householder QR with column pivoting takes the columns of the m x a
+/// matrix `w` (column-major, overwritten): at each step the column with the largest norm below
+/// the rows already reduced. Its first m entries are the best conditioned block it finds.
+template <class S>
+void pivotColumns(int m, int a, std::vector<S>& w, std::vector<int>& order) {
+  using std::sqrt;
+  const auto column = [&](int c) { return w.data() + std::size_t(c) * std::size_t(m); };
+  order.resize(std::size_t(a));
+  std::iota(order.begin(), order.end(), 0);
+  for (int i = 0; i < std::min(m, a); ++i) {
+    int best = i;
+    S bestNorm2 = -1;
+    for (int c = i; c < a; ++c) {
+      S norm2 = 0;
+      for (int r = i; r < m; ++r) norm2 += column(c)[r] * column(c)[r];
+      if (norm2 > bestNorm2) bestNorm2 = norm2, best = c;
+    }
+    if (best != i) {
+      std::swap_ranges(column(i), column(i) + m, column(best));
+      std::swap(order[std::size_t(i)], order[std::size_t(best)]);
+    }
+    if (!(bestNorm2 > 0)) return;  // the rest is zero (or not finite): any order will do
+    // Reflector on rows i..m-1 of column i, applied to the columns after it.
+    S* v = column(i);
+    const S norm = sqrt(bestNorm2);
+    const S alpha = v[i] > 0 ? S(-norm) : norm;
+    const S beta = 2 / (2 * (bestNorm2 - alpha * v[i]));
+    v[i] -= alpha;
+    for (int c = i + 1; c < a; ++c) {
+      S* x = column(c);
+      S dot = 0;
+      for (int r = i; r < m; ++r) dot += v[r] * x[r];
+      dot *= beta;
+      for (int r = i; r < m; ++r) x[r] -= dot * v[r];
+    }
+  }
+}
 
 /// GraphTest::regularSquare's working storage (threadScratch).
 template <class S>
 struct SquareWork {
   std::vector<S> mid, inverse;  ///< m x m, column-major
 };
-
-/// Y ~ A^-1 for the m x m matrix `a` (column-major, overwritten) into `y` (column-major) by
-/// Gauss-Jordan elimination with partial pivoting; false when a pivot is 0, not finite, or at
-/// most m eps times the largest |entry| (A numerically singular). Y is only the
-/// preconditioner of the graph test, which checks ||I - Y A|| < 1 itself, so how Y is computed
-/// does not affect what the test proves.
-template <class S>
-bool invertMidpoint(int m, std::vector<S>& a, std::vector<S>& y) {
-  using std::abs;
-  const auto at = [m](std::vector<S>& v, int i, int j) -> S& {
-    return v[std::size_t(j) * std::size_t(m) + std::size_t(i)];
-  };
-  S largest = 0;
-  for (const S& v : a) largest = std::max<S>(largest, abs(v));
-  const S floor = S(m) * ScalarTraits<S>::epsilon() * largest;
-  y.assign(std::size_t(m) * std::size_t(m), S(0));
-  for (int i = 0; i < m; ++i) at(y, i, i) = 1;
-  for (int k = 0; k < m; ++k) {
-    int p = k;
-    for (int i = k + 1; i < m; ++i)
-      if (abs(at(a, i, k)) > abs(at(a, p, k))) p = i;
-    const S pivot = at(a, p, k);
-    if (!(abs(pivot) > floor) || !isFinite(pivot)) return false;
-    if (p != k)
-      for (int j = 0; j < m; ++j)
-        std::swap(at(a, p, j), at(a, k, j)), std::swap(at(y, p, j), at(y, k, j));
-    // Row k scaled to a unit pivot, then eliminated from every other row.
-    for (int j = 0; j < m; ++j) at(a, k, j) /= pivot, at(y, k, j) /= pivot;
-    for (int i = 0; i < m; ++i) {
-      if (i == k) continue;
-      const S factor = at(a, i, k);
-      if (factor == 0) continue;
-      for (int j = 0; j < m; ++j) {
-        at(a, i, j) -= factor * at(a, k, j);
-        at(y, i, j) -= factor * at(y, k, j);
-      }
-    }
-  }
-  return true;
-}
 
 }  // namespace
 
@@ -151,14 +147,15 @@ bool GraphTest<S>::graph(std::span<const Interval<S>> jacobian, std::span<const 
   GraphWork<S>& w = threadScratch<S, GraphWork<S>>(fresh);
   // The m pivot columns of the midpoint Jacobian first: the best conditioned block.
   auto& mid = w.mid;
-  mid.resize(m_, a);
+  mid.resize(std::size_t(m_) * std::size_t(a));
   for (int i = 0; i < m_; ++i) {
-    for (int t = 0; t < a; ++t) mid(i, t) = jacobian[std::size_t(i) * n_ + axes[t]].midpoint();
+    for (int t = 0; t < a; ++t)
+      mid[std::size_t(t) * m_ + i] = jacobian[std::size_t(i) * n_ + axes[t]].midpoint();
   }
-  const auto& qr = w.qr.compute(mid);
+  pivotColumns(m_, a, mid, w.order);
   std::vector<int>& columns = w.columns;
   columns.clear();
-  for (int t = 0; t < m_; ++t) columns.push_back(axes[qr.colsPermutation().indices()(t)]);
+  for (int t = 0; t < m_; ++t) columns.push_back(axes[w.order[std::size_t(t)]]);
   if (regular(jacobian, columns)) return true;
   // A graph over the midpoint tangent space, which no coordinate block may be well placed for.
   if (tangentGraph(jacobian, axes)) return true;
@@ -233,7 +230,7 @@ bool GraphTest<S>::regularSquare(int m, std::span<const Interval<S>> matrix, std
     for (int t = 0; t < m; ++t) mid[std::size_t(t) * m + i] = entry(i, t).midpoint();
   }
   auto& y = w.inverse;
-  if (!invertMidpoint(m, mid, y)) return false;
+  if (!invertGaussJordan(m, mid, y)) return false;
   // || I - Y A ||_inf < 1, every entry enclosed with outward rounding; in double, one kernel
   // with one rounding-mode switch (the same bounds; the switches were most of this test's time).
   if constexpr (std::is_same_v<S, double>) {

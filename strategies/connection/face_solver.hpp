@@ -20,6 +20,7 @@
 #include "framework/core/bernstein.hpp"
 #include "framework/core/box.hpp"
 #include "framework/core/interval.hpp"
+#include "framework/core/inverse.hpp"
 #include "framework/core/iteration.hpp"
 #include "framework/core/midrad.hpp"
 #include "framework/core/scalar.hpp"
@@ -689,17 +690,15 @@ class FaceSolver {
     x.assign(point_.begin(), point_.end());
     for (int j = 0; j < m_; ++j) x[free_[j]] = y[j];
     system_->evaluate(x, f_, jacobian_);
-    Matrix<S>& jy = krawczykJ_;
-    jy.resize(m_, m_);
+    std::vector<S>& jy = krawczykJ_;  // column-major
+    jy.resize(std::size_t(m_) * m_);
     for (int i = 0; i < m_; ++i) {
-      for (int j = 0; j < m_; ++j) jy(i, j) = jacobian_[std::size_t(i) * n_ + free_[j]];
+      for (int j = 0; j < m_; ++j)
+        jy[std::size_t(j) * m_ + i] = jacobian_[std::size_t(i) * n_ + free_[j]];
     }
-    Eigen::FullPivLU<Matrix<S>>& lu = lu_;
-    lu.compute(jy);
     kLower_.clear(), kUpper_.clear();  // no operator (contract() needs one)
-    if (lu.rank() < m_) return Krawczyk::kUnknown;
-    Matrix<S>& inverse = krawczykInverse_;
-    inverse = lu.inverse();
+    std::vector<S>& inverse = krawczykInverse_;
+    if (!invertGaussJordan(m_, jy, inverse)) return Krawczyk::kUnknown;
     // F(y) by interval evaluation at the point (unless given), so its rounding is enclosed.
     std::vector<I>& fy = krawczykFy_;
     if (given) {
@@ -725,7 +724,7 @@ class FaceSolver {
 
   /// K(X) = y - Y F(y) + (I - Y J(X)) (X - y), row i into kLower_[i], kUpper_[i]; in double one
   /// kernel with one rounding-mode switch (ndc::krawczykOperator), the same operations.
-  void krawczykOperator(const Box<S>& box, const std::vector<S>& y, const Matrix<S>& inverse,
+  void krawczykOperator(const Box<S>& box, const std::vector<S>& y, const std::vector<S>& inverse,
                         const std::vector<Interval<S>>& fy) {
     using I = Interval<S>;
     kLower_.resize(m_);
@@ -737,10 +736,11 @@ class FaceSolver {
     }
     for (int i = 0; i < m_; ++i) {
       I k(y[i]);
-      for (int l = 0; l < m_; ++l) k -= I(inverse(i, l)) * fy[l];
+      for (int l = 0; l < m_; ++l) k -= I(inverse[std::size_t(l) * m_ + i]) * fy[l];
       for (int j = 0; j < m_; ++j) {
         I c(S(i == j ? 1 : 0));
-        for (int l = 0; l < m_; ++l) c -= I(inverse(i, l)) * jx_[std::size_t(l) * m_ + j];
+        for (int l = 0; l < m_; ++l)
+          c -= I(inverse[std::size_t(l) * m_ + i]) * jx_[std::size_t(l) * m_ + j];
         k += c * (I(box.lo[j], box.hi[j]) - I(y[j]));  // X - y, outward
       }
       kLower_[i] = k.lower();
@@ -780,7 +780,8 @@ class FaceSolver {
   std::vector<FaceEnds> halfEnds_;                 ///< and their ends
   std::vector<S> root_;                            ///< recurse's Newton root
   std::vector<S> newtonX_, newtonTrial_;           ///< newton's point and trial step
-  Matrix<S> newtonJ_, krawczykJ_, krawczykInverse_;
+  Matrix<S> newtonJ_;
+  std::vector<S> krawczykJ_, krawczykInverse_;  // column-major
   Eigen::FullPivLU<Matrix<S>> lu_;
   Vector<S> newtonRhs_;
   std::vector<S> krawczykY_, krawczykX_;

@@ -11,10 +11,8 @@
 #include <span>
 #include <vector>
 
-#include <Eigen/Dense>
-#include <boost/multiprecision/eigen.hpp>
-
 #include "framework/core/box.hpp"
+#include "framework/core/inverse.hpp"
 #include "framework/core/iteration.hpp"
 #include "framework/core/linearised_system.hpp"
 #include "framework/core/midrad.hpp"
@@ -42,12 +40,12 @@ void centreAndRadius(const Box<S>& box, std::vector<S>& centre, std::vector<S>& 
 /// J(X) by the mean value theorem, or, for an equation whose gradient is affine (total degree
 /// 2, MidRadEvaluator::gradientAffine), its Taylor form grad F_i(c) + H_i d / 2, enclosed by the
 /// gradient at c plus half of sum_l |H_jl| radius_l (MidRadEvaluator::gradientSpread, the radius
-/// of J(X)): half the mean-value form's spread. Where H_i is proven semidefinite (MidRadEvaluator::curvature)
-/// the slopes are the gradient at c alone and the one-sided remainder d^T H_i d / 2 joins the
-/// value instead, half as wide again. Slopes, not derivatives, so the model proves only that a face
-/// holds no zero (faceExcluded, faceKrawczykExcludes), never that a zero is unique. It
-/// is built with one evaluation per equation, and then encloses F on each of the leaf's faces
-/// in O(n) operations per equation (faceExcluded), where an evaluation on the face costs a
+/// of J(X)): half the mean-value form's spread. Where H_i is proven semidefinite
+/// (MidRadEvaluator::curvature) the slopes are the gradient at c alone and the one-sided remainder
+/// d^T H_i d / 2 joins the value instead, half as wide again. Slopes, not derivatives, so the model
+/// proves only that a face holds no zero (faceExcluded, faceKrawczykExcludes), never that a zero is
+/// unique. It is built with one evaluation per equation, and then encloses F on each of the leaf's
+/// faces in O(n) operations per equation (faceExcluded), where an evaluation on the face costs a
 /// program run with its gradient: a leaf in R^n has 2 n (n - 1) faces of dimension n - 2 (for a
 /// surface), and most of them do not meet M.
 template <class S>
@@ -193,9 +191,7 @@ struct FacePreconditioner {
 /// buildFacePreconditioner's working storage (threadScratch).
 template <class S>
 struct PreconditionerWork {
-  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
-  Matrix mid, inverse;
-  Eigen::FullPivLU<Matrix> lu;
+  std::vector<S> mid, inverse;  ///< m x m, column-major
 };
 
 /// Builds `out` for the faces of the model's leaf that fix `axes` (k of them).
@@ -203,7 +199,6 @@ template <class S>
 void buildFacePreconditioner(const LeafModel<S>& model, std::span<const int> axes,
                              FacePreconditioner<S>& out) {
   using std::abs;
-  using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
   out.valid = false;
   if (!model.valid) return;
   const std::size_t m = model.valueMid.size(), n = model.centre.size();
@@ -215,18 +210,16 @@ void buildFacePreconditioner(const LeafModel<S>& model, std::span<const int> axe
   if (out.free.size() != m) return;
   std::optional<PreconditionerWork<S>> fresh;
   PreconditionerWork<S>& w = threadScratch<S, PreconditionerWork<S>>(fresh);
-  Matrix& mid = w.mid;
-  mid.resize(Eigen::Index(m), Eigen::Index(m));
+  std::vector<S>& mid = w.mid;
+  mid.resize(m * m);
   for (std::size_t i = 0; i < m; ++i) {
-    for (std::size_t t = 0; t < m; ++t) mid(i, t) = model.gradMid[i * n + out.free[t]];
+    for (std::size_t t = 0; t < m; ++t) mid[t * m + i] = model.gradMid[i * n + out.free[t]];
   }
-  const Eigen::FullPivLU<Matrix>& lu = w.lu.compute(mid);
-  if (lu.rank() < static_cast<Eigen::Index>(m)) return;
-  Matrix& inverse = w.inverse;
-  inverse = lu.inverse();
+  std::vector<S>& inverse = w.inverse;
+  if (!invertGaussJordan(static_cast<int>(m), mid, inverse)) return;
   out.y.resize(m * m);
   for (std::size_t l = 0; l < m; ++l) {
-    for (std::size_t i = 0; i < m; ++i) out.y[l * m + i] = inverse(l, i);
+    for (std::size_t i = 0; i < m; ++i) out.y[l * m + i] = inverse[i * m + l];
   }
   // |I - Y J_free(X)|_lj <= |delta_lj - sum_i Y_li mid_ij| + sum_i |Y_li| rad_ij, plus the
   // gamma_p bound of the sums' rounding; then the spread, rounded up the same way.
