@@ -86,22 +86,29 @@ bool LinearisedSystem<S>::solvesInside() {
     if (!(lo <= hi)) return false;
     witness_[0] = (lo + hi) / 2;
   } else if (k == 2) {
+    // The mean of step 7c's vertices first (its strips are those shrunk, widened by the
+    // linearisation's terms, and usually both hold it), then of the shrunk strips' polygon.
+    const auto mean = [&](const std::vector<S>& polygon) {
+      const std::size_t count = polygon.size() / 2;
+      witness_[0] = witness_[1] = 0;
+      for (std::size_t v = 0; v < count; ++v) {
+        witness_[0] += polygon[2 * v];
+        witness_[1] += polygon[2 * v + 1];
+      }
+      witness_[0] /= S(count);
+      witness_[1] /= S(count);
+    };
+    if (polygon_.empty()) return false;
+    mean(polygon_);
+    if (insideAt(witness_.data())) return true;
     tight_ = polygon_;
     for (int j = 0; j < n; ++j) {
       const S& u0 = nul(j, 0);
       const S& u1 = nul(j, 1);
       if (u0 == 0 && u1 == 0) continue;
-      if (!clip(tight_, u0, u1, a_[j] + h[j] * inside) ||
-          !clip(tight_, -u0, -u1, h[j] * inside - a_[j]))
-        return false;
+      if (!clipStrip(tight_, u0, u1, a_[j] + h[j] * inside, h[j] * inside - a_[j])) return false;
     }
-    const std::size_t count = tight_.size() / 2;
-    for (std::size_t v = 0; v < count; ++v) {
-      witness_[0] += tight_[2 * v];
-      witness_[1] += tight_[2 * v + 1];
-    }
-    witness_[0] /= S(count);
-    witness_[1] /= S(count);
+    mean(tight_);
   } else {
     for (int p = 0; p < k; ++p) witness_[std::size_t(p)] = (tlo_[p] + thi_[p]) / 2;
   }
@@ -360,11 +367,26 @@ bool LinearisedSystem<S>::kernelPolygonExcludes() {
     const S& u1 = nul(j, 1);
     if (u0 == 0 && u1 == 0) continue;  // decided by the propagation
     const S slack = 4 * tol * (abs(a_[j]) + b_[j] + (abs(u0) + abs(u1)) * reach);
-    if (!clip(polygon_, u0, u1, a_[j] + b_[j] + slack) ||
-        !clip(polygon_, -u0, -u1, b_[j] - a_[j] + slack))
-      return true;
+    if (!clipStrip(polygon_, u0, u1, a_[j] + b_[j] + slack, b_[j] - a_[j] + slack)) return true;
   }
   return false;
+}
+
+template <class S>
+bool LinearisedSystem<S>::clipStrip(std::vector<S>& polygon, const S& u0, const S& u1,
+                                    const S& upper, const S& lower) {
+  // Most strips hold the whole polygon: one pass shows it (with clip's own expressions, so a
+  // strip it keeps whole is one clip would keep whole), else the two clips.
+  const S v0 = -u0, v1 = -u1;
+  const std::size_t count = polygon.size() / 2;
+  bool whole = true;
+  for (std::size_t v = 0; v < count && whole; ++v) {
+    const S& x = polygon[2 * v];
+    const S& y = polygon[2 * v + 1];
+    whole = u0 * x + u1 * y - upper <= 0 && v0 * x + v1 * y - lower <= 0;
+  }
+  if (whole) return count > 0;
+  return clip(polygon, u0, u1, upper) && clip(polygon, v0, v1, lower);
 }
 
 template <class S>
@@ -379,10 +401,14 @@ bool LinearisedSystem<S>::clip(std::vector<S>& polygon, const S& u0, const S& u1
     const S& x1 = polygon[2 * w];
     const S& y1 = polygon[2 * w + 1];
     const S s0 = u0 * x0 + u1 * y0 - bound, s1 = u0 * x1 + u1 * y1 - bound;
-    if (s0 <= 0) clipped_.insert(clipped_.end(), {x0, y0});
+    if (s0 <= 0) {
+      clipped_.push_back(x0);
+      clipped_.push_back(y0);
+    }
     if ((s0 < 0 && s1 > 0) || (s0 > 0 && s1 < 0)) {
       const S f = s0 / (s0 - s1);
-      clipped_.insert(clipped_.end(), {x0 + f * (x1 - x0), y0 + f * (y1 - y0)});
+      clipped_.push_back(x0 + f * (x1 - x0));
+      clipped_.push_back(y0 + f * (y1 - y0));
     }
   }
   polygon.swap(clipped_);

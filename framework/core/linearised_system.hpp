@@ -79,6 +79,9 @@ class LinearisedSystem {
   /// Keeps the part of `polygon` (vertices (t_0, t_1) interleaved) where u . t <= bound
   /// (Sutherland-Hodgman); false when nothing is left.
   bool clip(std::vector<S>& polygon, const S& u0, const S& u1, const S& bound);
+  /// clip() by u . t <= upper and then by -u . t <= lower (a strip); false when nothing is
+  /// left.
+  bool clipStrip(std::vector<S>& polygon, const S& u0, const S& u1, const S& upper, const S& lower);
   /// 8: the multiplier test (reweighted least squares for y); true when some y excludes.
   bool multiplierExcludes(int steps);
   /// True when some d = N t - J^+ mid G lies inside the box by a relative 1e-6 on every axis:
