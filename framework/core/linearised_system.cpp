@@ -41,6 +41,7 @@ void LinearisedSystem<S>::resize(int n, int m) {
 
 template <class S>
 bool LinearisedSystem<S>::excludes(const S& hh, int multiplierSteps) {
+  kernelReady_ = false;
   if (!factorTranspose()) return false;  // 3: J_c (nearly) rank-deficient
   invertLowerFactor();                   // 4
   S migSq = 0;
@@ -49,9 +50,47 @@ bool LinearisedSystem<S>::excludes(const S& hh, int multiplierSteps) {
   kernelBounds();                                // 7
   if (kernelPropagationExcludes()) return true;
   if (n_ - m_ == 2 && kernelPolygonExcludes()) return true;
+  kernelReady_ = true;
   // 8, unless a d found by steps 7b and 7c solves the linearised system with mid G well inside
   // the box: then no multipliers exist (Farkas), and the boxes around M skip the search.
   return !solvesInside() && multiplierExcludes(multiplierSteps);
+}
+
+template <class S>
+std::uint64_t LinearisedSystem<S>::emptyHalves() const {
+  // Every solution has d_j within b_j - h_j of (N t)_j - a_j (step 7), t in what steps 7b and
+  // 7c left: (N t)_j ranges over [lo, hi] there (the polygon's or the interval's end points,
+  // the t box's interval product for k > 2). The half d_j >= 0 holds none when
+  // hi - a_j + b_j - h_j < 0, with a slack for every rounding here (as facetsMet's).
+  using std::abs;
+  const int n = n_, k = n_ - m_;
+  if (!kernelReady_ || n > 32) return 0;
+  S reach = 0;
+  for (int p = 0; p < k; ++p) reach = std::max({reach, abs(tlo_[p]), abs(thi_[p])});
+  std::uint64_t empty = 0;
+  for (int j = 0; j < n; ++j) {
+    S lo = 0, hi = 0, weight = 0;
+    if (k == 2) {
+      lo = std::numeric_limits<S>::infinity(), hi = -lo;
+      for (std::size_t v = 0; v < polygon_.size() / 2; ++v) {
+        const S value = nul(j, 0) * polygon_[2 * v] + nul(j, 1) * polygon_[2 * v + 1];
+        lo = std::min(lo, value);
+        hi = std::max(hi, value);
+      }
+    } else {
+      for (int p = 0; p < k; ++p) {
+        const S& u = nul(j, p);
+        lo += std::min(u * tlo_[p], u * thi_[p]);
+        hi += std::max(u * tlo_[p], u * thi_[p]);
+      }
+    }
+    for (int p = 0; p < k; ++p) weight += abs(nul(j, p));
+    const S slack = 8 * tol_ * (abs(a_[j]) + b_[j] + h[j] + weight * reach);
+    const S edge = h[j] - b_[j] - slack;  // <= 0: b_j >= h_j
+    if (hi - a_[j] < edge) empty |= std::uint64_t(1) << (2 * j + 1);
+    if (a_[j] - lo < edge) empty |= std::uint64_t(1) << (2 * j);
+  }
+  return empty;
 }
 
 template <class S>

@@ -5,6 +5,7 @@
 /// both produce such a system and ask it the same questions.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "framework/core/multipliers.hpp"
@@ -45,6 +46,12 @@ class LinearisedSystem {
   /// True when the tests prove that no d in the box solves the system; `hh` is |h|_2^2 rounded
   /// up, `multiplierSteps` caps the multiplier test's least-squares steps.
   bool excludes(const S& hh, int multiplierSteps);
+
+  /// After excludes() returned false having run steps 7b and 7c (else 0; and 0 for n > 32):
+  /// the halves of the box that step 7's bounds show to hold no solution, bit 2 j for d_j <= 0
+  /// and bit 2 j + 1 for d_j >= 0 (the children of a halving along j; docs/subdivision.md,
+  /// "Empty halves").
+  std::uint64_t emptyHalves() const;
 
   /// For k = n - m = 2: which facets of the box (fixed axis j at its lower end, entry 2 j, or
   /// its upper end, entry 2 j + 1) may hold a solution, into `met` (2 n entries, 1: may). A
@@ -100,6 +107,7 @@ class LinearisedSystem {
 
   int n_ = 0, m_ = 0;
   S tol_;
+  bool kernelReady_ = false;  // steps 7b and 7c ran on this system and kept it
   // Scratch (matrices row-major unless noted).
   std::vector<S> w_, beta_, diag_;           // w_: J_c^T (n x m, column-major), reflectors
   std::vector<S> q_;                         // n x n orthogonal factor, column-major

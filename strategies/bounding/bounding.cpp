@@ -60,6 +60,8 @@ void BernsteinBounding<S>::root(State& state) const {
 template <class S>
 void BernsteinBounding<S>::halve(const State& parent, int axis, State& lower, State& upper) const {
   halveBox(parent.box, axis, lower.box, upper.box);
+  lower.emptyHalves = upper.emptyHalves = 0;
+  lower.emptyByParent = upper.emptyByParent = false;
   // Only the first use of a per-level state sizes it; afterwards Bernstein::halve overwrites
   // the children's coefficients in place.
   const std::size_t m = parent.patches.size();
@@ -206,9 +208,16 @@ LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& 
 
 template <class S>
 bool LinearizedBounding<S>::mayContainZero(const State& state) const {
+  // A half that the parent's test showed empty; else the box's own halves, found below.
+  if (state.emptyByParent) return false;
+  state.emptyHalves = 0;
   // The per-equation hulls first: cheap, and they discard most boxes far from every F_i = 0.
   if (!bernstein_.mayContainZero(state)) return false;
-  if (!anyEvaluated_) return !enabled_ || !linearizationExcludes(state.box);
+  if (!anyEvaluated_) {
+    if (!enabled_) return true;
+    const S hh = centreAndHalfWidths(state.box);
+    return !linearise() || !simultaneousExcludes(hh, state);
+  }
   // Equations without a patch: their mean-value forms, then the simultaneous test on the same
   // linearisation.
   const S hh = centreAndHalfWidths(state.box);
@@ -218,7 +227,14 @@ bool LinearizedBounding<S>::mayContainZero(const State& state) const {
   if (meanValueExcludes(true)) return false;
   if (!lineariseRows(false)) return true;
   if (meanValueExcludes(false)) return false;
-  return !enabled_ || !system_.excludes(hh, kMultiplierIterations);
+  return !enabled_ || !simultaneousExcludes(hh, state);
+}
+
+template <class S>
+bool LinearizedBounding<S>::simultaneousExcludes(const S& hh, const State& state) const {
+  if (system_.excludes(hh, kMultiplierIterations)) return true;
+  state.emptyHalves = system_.emptyHalves();
+  return false;
 }
 
 template <class S>

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <string_view>
 #include <variant>
 #include <vector>
@@ -34,10 +35,17 @@ namespace ndc {
 template <class S>
 class BernsteinBounding final {
  public:
-  /// Per-box state: the box and one patch per equation.
+  /// Per-box state: the box and one patch per equation; and what LinearizedBounding's test of
+  /// the box showed about its halves (its children).
   struct State {
     Box<S> box;
     std::vector<Bernstein<S>> patches;
+    /// Halves of the box that hold no common zero by the test of the box itself (bit 2 j: the
+    /// half x_j <= c_j, bit 2 j + 1: x_j >= c_j, c the centre; n <= 32), written by
+    /// LinearizedBounding::mayContainZero.
+    mutable std::uint64_t emptyHalves = 0;
+    /// This box is such a half of its parent: it holds no common zero, without a test.
+    bool emptyByParent = false;
   };
 
   /// Converts every equation of `problem` to Bernstein form on `domain`.
@@ -174,9 +182,12 @@ class LinearizedBounding final {
   int dim() const { return bernstein_.dim(); }
   /// State of the whole domain.
   void root(State& state) const { bernstein_.root(state); }
-  /// Children of `parent` at the midpoint of `axis` (Bernstein halving).
+  /// Children of `parent` at the midpoint of `axis` (Bernstein halving); a child that the
+  /// parent's test showed to hold no common zero (State::emptyHalves) is marked so.
   void halve(const State& parent, int axis, State& lower, State& upper) const {
     bernstein_.halve(parent, axis, lower, upper);
+    lower.emptyByParent = axis < 32 && ((parent.emptyHalves >> (2 * axis)) & 1);
+    upper.emptyByParent = axis < 32 && ((parent.emptyHalves >> (2 * axis + 1)) & 1);
   }
   /// Alg. 1 step (1): false when a Bernstein hull excludes 0 or, for m >= 2, when the
   /// linearised system has no solution in the box (see the class comment).
@@ -203,6 +214,9 @@ class LinearizedBounding final {
   static bool hasPatch(const Expression& equation);
 
  private:
+  /// Steps 3 to 8 on the linearisation of the box of `state` (hh = |h|_2^2); true when they
+  /// discard it, else the halves they show empty go to state.emptyHalves.
+  bool simultaneousExcludes(const S& hh, const State& state) const;
   /// `problem` with only the equations that have a patch.
   static Problem patchedEquations(const Problem& problem);
   /// The mean-value test of each equation without a patch, affine or not, after steps 1 and 2
