@@ -603,7 +603,10 @@ Bernstein<S> operator*(const Bernstein<S>& a, const Bernstein<S>& b) {
       S v = p.coefficients()[lin];
       std::size_t off = 0;
       for (int j = 0; j < n; ++j) {
-        v *= binom[j][idx[j]];
+        // A factor of 1 (the ends of every row) leaves v as it is: skipped (it is most of
+        // them at degree 1 and 2, and an MPFR product costs as much as any other).
+        const S& factor = binom[j][idx[j]];
+        if (factor != 1) v *= factor;
         off += static_cast<std::size_t>(idx[j]) * st[j];
       }
       values[lin] = v;
@@ -623,9 +626,10 @@ Bernstein<S> operator*(const Bernstein<S>& a, const Bernstein<S>& b) {
       tmp *= vb[k];
       c[oa[i] + ob[k]] += tmp;
     }
-  // Divide by C(d+e, k) per axis.
+  // Divide by C(d+e, k) per axis (a divisor of 1 changes nothing and is skipped).
   forEachIndex(f, r.size(), [&](std::size_t lin, const std::vector<int>& idx) {
-    for (int j = 0; j < n; ++j) c[lin] /= cf[j][idx[j]];
+    for (int j = 0; j < n; ++j)
+      if (cf[j][idx[j]] != 1) c[lin] /= cf[j][idx[j]];
   });
   return r;
 }

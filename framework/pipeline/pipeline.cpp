@@ -207,14 +207,14 @@ SolutionCells subdividePatches(const Problem& problem, const Settings& settings,
 }
 
 /// The largest error of a double Bernstein form of `e` on `box`, relative to the largest
-/// coefficient, against the same form computed in 256-bit MPFR (from the exact decimal
+/// coefficient, against the same form computed in 128-bit MPFR (from the exact decimal
 /// literals): cancellation such as `(x + 1e16)^2 - 1e32 - 2e16*x` leaves nothing of x^2 in double.
 double precisionLoss(const Expression& e, const Box<double>& box, const Bernstein<double>& form) {
   struct Restore {
     unsigned bits = mpfrPrecision();
     ~Restore() { setMpfrPrecision(bits); }
   } restore;
-  setMpfrPrecision(256);
+  setMpfrPrecision(128);
   const Bernstein<Mpfr> exact = e.toBernstein<Mpfr>(toScalar<Mpfr>(box));
   double largest = 0, error = 0;
   for (std::size_t j = 0; j < exact.coefficients().size(); ++j) {
@@ -251,7 +251,7 @@ std::vector<double> checkEquations(const Problem& problem, const Box<S>& domain)
           std::ostringstream o;
           o << problem.path << ": equation " << i + 1 << " loses its precision in double "
             << "arithmetic (its Bernstein coefficients are off by " << loss
-            << " of the largest, against 256-bit arithmetic): use --scalar mpfr, or expand and "
+            << " of the largest, against 128-bit arithmetic): use --scalar mpfr, or expand and "
             << "simplify it";
           throw InputError(o.str());
         }
@@ -284,7 +284,7 @@ std::vector<double> checkEquations(const Problem& problem, const Box<S>& domain)
 }
 
 /// The rounding bound of each equation's Bernstein coefficients (relative to the largest) that
-/// the certificate assumes: in double the measured loss against 256-bit arithmetic, with a
+/// the certificate assumes: in double the measured loss against 128-bit arithmetic, with a
 /// factor of 4 for the boxes not measured (B-spline patches beyond the first 8); in MPFR the
 /// conversion is exact to far below what any certificate resolves.
 std::vector<double> coefficientErrors(const std::vector<double>& losses) {
