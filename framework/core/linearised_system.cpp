@@ -62,35 +62,56 @@ std::uint64_t LinearisedSystem<S>::emptyHalves() const {
   // 7c left: (N t)_j ranges over [lo, hi] there (the polygon's or the interval's end points,
   // the t box's interval product for k > 2). The half d_j >= 0 holds none when
   // hi - a_j + b_j - h_j < 0, with a slack for every rounding here (as facetsMet's).
-  using std::abs;
-  const int n = n_, k = n_ - m_;
-  if (!kernelReady_ || n > 32) return 0;
-  S reach = 0;
-  for (int p = 0; p < k; ++p) reach = std::max({reach, abs(tlo_[p]), abs(thi_[p])});
+  if (!kernelReady_ || n_ > 32) return 0;
+  const S reach = kernelReach();
   std::uint64_t empty = 0;
-  for (int j = 0; j < n; ++j) {
-    S lo = 0, hi = 0, weight = 0;
-    if (k == 2) {
-      lo = std::numeric_limits<S>::infinity(), hi = -lo;
-      for (std::size_t v = 0; v < polygon_.size() / 2; ++v) {
-        const S value = nul(j, 0) * polygon_[2 * v] + nul(j, 1) * polygon_[2 * v + 1];
-        lo = std::min(lo, value);
-        hi = std::max(hi, value);
-      }
-    } else {
-      for (int p = 0; p < k; ++p) {
-        const S& u = nul(j, p);
-        lo += std::min(u * tlo_[p], u * thi_[p]);
-        hi += std::max(u * tlo_[p], u * thi_[p]);
-      }
-    }
-    for (int p = 0; p < k; ++p) weight += abs(nul(j, p));
-    const S slack = 8 * tol_ * (abs(a_[j]) + b_[j] + h[j] + weight * reach);
+  for (int j = 0; j < n_; ++j) {
+    S lo, hi;
+    const S slack = kernelRange(j, reach, lo, hi);
     const S edge = h[j] - b_[j] - slack;  // <= 0: b_j >= h_j
     if (hi - a_[j] < edge) empty |= std::uint64_t(1) << (2 * j + 1);
     if (a_[j] - lo < edge) empty |= std::uint64_t(1) << (2 * j);
   }
   return empty;
+}
+
+template <class S>
+S LinearisedSystem<S>::kernelReach() const {
+  using std::abs;
+  S reach = 0;
+  if (n_ - m_ == 2) {
+    for (const S& v : polygon_) reach = std::max(reach, abs(v));
+  } else {
+    for (int p = 0; p < n_ - m_; ++p) reach = std::max({reach, abs(tlo_[p]), abs(thi_[p])});
+  }
+  return reach;
+}
+
+template <class S>
+S LinearisedSystem<S>::kernelRange(int j, const S& reach, S& lo, S& hi) const {
+  // (N t)_j over the polygon's vertices (a linear function takes its extremes there), else the
+  // interval product over the t box.
+  using std::abs;
+  const int k = n_ - m_;
+  S weight = 0;
+  lo = hi = 0;
+  if (k == 2) {
+    lo = std::numeric_limits<S>::infinity(), hi = -lo;
+    for (std::size_t v = 0; v < polygon_.size() / 2; ++v) {
+      const S value = nul(j, 0) * polygon_[2 * v] + nul(j, 1) * polygon_[2 * v + 1];
+      lo = std::min(lo, value);
+      hi = std::max(hi, value);
+    }
+  } else {
+    for (int p = 0; p < k; ++p) {
+      const S& u = nul(j, p);
+      lo += std::min(u * tlo_[p], u * thi_[p]);
+      hi += std::max(u * tlo_[p], u * thi_[p]);
+    }
+  }
+  for (int p = 0; p < k; ++p) weight += abs(nul(j, p));
+  // Generous against every rounding here and in the caller's comparisons with h_j and b_j.
+  return 8 * tol_ * (abs(a_[j]) + b_[j] + h[j] + weight * reach);
 }
 
 template <class S>
@@ -467,7 +488,6 @@ bool LinearisedSystem<S>::facetsMet(std::vector<char>& met) {
   // polygon with (N t)_j - a_j >= 2 h_j - b_j (mirrored for -h_j). The polygon is relaxed
   // around every solution (kernelPolygonExcludes), so the largest value of (N t)_j over its
   // vertices, plus its rounding, bounds that of every solution.
-  using std::abs;
   met.assign(2 * static_cast<std::size_t>(n_), 1);
   if (n_ - m_ != 2 || !factorTranspose()) return false;
   invertLowerFactor();
@@ -476,21 +496,10 @@ bool LinearisedSystem<S>::facetsMet(std::vector<char>& met) {
     std::fill(met.begin(), met.end(), 0);
     return true;
   }
-  S reach = 0;
-  for (const S& v : polygon_) reach = std::max(reach, abs(v));
-  const std::size_t count = polygon_.size() / 2;
+  const S reach = kernelReach();
   for (int j = 0; j < n_; ++j) {
-    const S& u0 = nul(j, 0);
-    const S& u1 = nul(j, 1);
-    S lo = std::numeric_limits<S>::infinity(), hi = -lo;
-    for (std::size_t v = 0; v < count; ++v) {
-      const S value = u0 * polygon_[2 * v] + u1 * polygon_[2 * v + 1];
-      lo = std::min(lo, value);
-      hi = std::max(hi, value);
-    }
-    // Generous against every rounding here (the products, 2 h_j - b_j, the comparisons).
-    const S slack = 8 * tol_ * (abs(a_[j]) + b_[j] + h[j] + (abs(u0) + abs(u1)) * reach);
-    const S edge = 2 * h[j] - b_[j] - slack;
+    S lo, hi;
+    const S edge = 2 * h[j] - b_[j] - kernelRange(j, reach, lo, hi);
     met[2 * std::size_t(j) + 1] = hi - a_[j] >= edge;
     met[2 * std::size_t(j)] = a_[j] - lo >= edge;
   }

@@ -83,6 +83,13 @@ class LinearisedSystem {
   /// half-planes of the axes' strips (its vertices left in polygon_); true when nothing is
   /// left.
   bool kernelPolygonExcludes();
+  /// The largest |t_p| that kernelRange's products take: over the polygon's vertices for
+  /// k = 2, else over the t box.
+  S kernelReach() const;
+  /// The range [lo, hi] of (N t)_j over what steps 7b and 7c left of t (the polygon for
+  /// k = 2, the t box otherwise, which hold N^T d for every solution d); returns the slack
+  /// that covers the rounding of the range and of comparing it with h_j and b_j.
+  S kernelRange(int j, const S& reach, S& lo, S& hi) const;
   /// Keeps the part of `polygon` (vertices (t_0, t_1) interleaved) where u . t <= bound
   /// (Sutherland-Hodgman); false when nothing is left.
   bool clip(std::vector<S>& polygon, const S& u0, const S& u1, const S& bound);
