@@ -6,6 +6,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "framework/core/form_rounding.hpp"
 #include "framework/core/tape.hpp"
 
 namespace ndc {
@@ -297,8 +298,24 @@ S evaluateConstant(const Tape& tape, std::size_t begin, std::size_t end) {
   return runValue<S>(tape, begin, end, {}, work);
 }
 
+namespace {
+
+/// bernsteinOfTape's hooks where no rounding bound is kept.
 template <class S>
-Bernstein<S> bernsteinOfTape(const Tape& tape, const Box<S>& domain) {
+struct Untracked {
+  void constant(const TapeConstant&) {}
+  void variable() {}
+  void unbounded() {}
+  void sum(const Bernstein<S>&, const Bernstein<S>&) {}
+  void product(const Bernstein<S>&, const Bernstein<S>&) {}
+  void divide() {}
+  Bernstein<S> power(const Bernstein<S>& a, int exponent) { return pow(a, exponent); }
+};
+
+/// The Bernstein form of the program, with `track` told of every operation before it is done
+/// (Untracked, or FormRounding for double).
+template <class S, class Track>
+Bernstein<S> runBernstein(const Tape& tape, const Box<S>& domain, Track& track) {
   std::vector<Bernstein<S>> stack;
   std::vector<std::optional<Bernstein<S>>> leaves(tape.leaves().size());
   const auto ops = tape.ops();
@@ -312,31 +329,38 @@ Bernstein<S> bernsteinOfTape(const Tape& tape, const Box<S>& domain) {
     }
     switch (op.kind) {
       case K::kConstant:
+        track.constant(tape.constants()[arg]);
         stack.push_back(Bernstein<S>::constant(domain, tape.constants()[arg].as<S>()));
         break;
       case K::kVariable:
+        track.variable();
         stack.push_back(Bernstein<S>::variable(domain, op.arg));
         break;
       case K::kLeaf:
+        track.unbounded();
         if (!leaves[arg]) leaves[arg] = leafOnDomain(*tape.leaves()[arg].polynomial, domain);
         stack.push_back(*leaves[arg]);
         break;
       case K::kAdd:
+        track.sum(stack.back(), right);
         stack.back() = stack.back() + right;
         break;
       case K::kSub:
+        track.sum(stack.back(), right);
         stack.back() = stack.back() - right;
         break;
       case K::kMul:
+        track.product(stack.back(), right);
         stack.back() = stack.back() * right;
         break;
       case K::kDiv: {
         // The divisor is a constant: scale by its reciprocal, computed in S.
+        track.divide();
         stack.back() = stack.back() * (S(1) / evaluateConstant<S>(tape, arg, i));
         break;
       }
       case K::kPow:
-        stack.back() = pow(stack.back(), op.arg);
+        stack.back() = track.power(stack.back(), op.arg);
         break;
       case K::kNeg:
         stack.back() = -stack.back();
@@ -344,6 +368,22 @@ Bernstein<S> bernsteinOfTape(const Tape& tape, const Box<S>& domain) {
     }
   }
   return std::move(stack.back());
+}
+
+}  // namespace
+
+template <class S>
+Bernstein<S> bernsteinOfTape(const Tape& tape, const Box<S>& domain) {
+  Untracked<S> track;
+  return runBernstein<S>(tape, domain, track);
+}
+
+Bernstein<double> bernsteinOfTape(const Tape& tape, const Box<double>& domain,
+                                  double& roundingError) {
+  FormRounding track;
+  Bernstein<double> form = runBernstein<double>(tape, domain, track);
+  roundingError = track.top();
+  return form;
 }
 
 // ---- Explicit instantiation --------------------------------------------------------------------

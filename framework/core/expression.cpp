@@ -22,6 +22,12 @@ void checkSize(const Expression& e, std::span<X> x, const char* what) {
                                 std::to_string(x.size()) + ", expected " + std::to_string(e.dim()));
 }
 
+void checkDomain(const Expression& e, int dim) {
+  if (dim != e.dim())
+    throw std::invalid_argument("Expression::toBernstein: the domain has dimension " +
+                                std::to_string(dim) + ", expected " + std::to_string(e.dim()));
+}
+
 /// A program of one operand instruction.
 std::shared_ptr<const Tape> single(int dim, const TapeOp& op) {
   auto tape = std::make_shared<Tape>(dim);
@@ -155,11 +161,14 @@ Interval<S> Expression::evaluate(std::span<const Interval<S>> x,
 
 template <class S>
 Bernstein<S> Expression::toBernstein(const Box<S>& domain) const {
-  if (domain.dim() != dim_)
-    throw std::invalid_argument("Expression::toBernstein: the domain has dimension " +
-                                std::to_string(domain.dim()) + ", expected " +
-                                std::to_string(dim_));
+  checkDomain(*this, domain.dim());
   return bernsteinOfTape(*tape_, domain);
+}
+
+Bernstein<double> Expression::toBernstein(const Box<double>& domain,
+                                          double& roundingError) const {
+  checkDomain(*this, domain.dim());
+  return bernsteinOfTape(*tape_, domain, roundingError);
 }
 
 // ---- Explicit instantiation --------------------------------------------------------------------

@@ -80,6 +80,10 @@ class Expression {
   /// linear polynomial on its interval; no power-basis conversion).
   template <class S>
   Bernstein<S> toBernstein(const Box<S>& domain) const;
+  /// toBernstein in double, with `roundingError` >= the largest error of a coefficient against
+  /// the exact form (the literals as written), proven along the way (form_rounding.hpp);
+  /// infinity for expressions with B-spline leaves or divisions.
+  Bernstein<double> toBernstein(const Box<double>& domain, double& roundingError) const;
 
  private:
   /// The program of `a`, then of `*b` (for binary kinds), then `kind`.

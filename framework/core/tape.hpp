@@ -116,5 +116,10 @@ S evaluateConstant(const Tape& tape, std::size_t begin, std::size_t end);
 /// linear polynomial on its interval, each leaf the piece holding the domain's projection).
 template <class S>
 Bernstein<S> bernsteinOfTape(const Tape& tape, const Box<S>& domain);
+/// bernsteinOfTape in double, with `roundingError` >= the largest error of a coefficient
+/// against the exact form of the program (literals as written; form_rounding.hpp): infinity
+/// for programs with leaves or divisions.
+Bernstein<double> bernsteinOfTape(const Tape& tape, const Box<double>& domain,
+                                  double& roundingError);
 
 }  // namespace ndc

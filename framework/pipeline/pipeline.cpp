@@ -15,6 +15,7 @@
 #include "framework/core/application.hpp"
 #include "framework/core/bernstein.hpp"
 #include "framework/core/budget.hpp"
+#include "framework/core/form_rounding.hpp"
 #include "framework/core/grid.hpp"
 #include "framework/core/orientation.hpp"
 #include "framework/core/parallel.hpp"
@@ -226,35 +227,67 @@ double precisionLoss(const Expression& e, const Box<double>& box, const Bernstei
   return error / largest;
 }
 
+/// What checkEquations learnt of the rounding of an equation's double Bernstein forms,
+/// relative to the largest coefficient: the largest bound proven along the way (form_rounding.hpp)
+/// where it was below kProvenRounding, and the largest error measured against 128-bit arithmetic
+/// on the first kPrecisionBoxes boxes where it was not.
+struct EquationRounding {
+  double proven = 0;
+  double measured = 0;
+  bool allProven = true;
+};
+
+/// A proven rounding bound this small (8192 units of round-off) is used as it is: it adds at
+/// most 8 times the certificate's own margin of 1024 units to the crossing's margins, and
+/// cancellation (a measured loss near the refusal at 1e-6) is far above it. Larger bounds are
+/// measured instead.
+constexpr double kProvenRounding = 0x1p-40;
+constexpr std::size_t kPrecisionBoxes = 8;
+
+/// Refuses an equation whose double Bernstein form on a box loses its precision (the error
+/// against 128-bit arithmetic above 1e-6 of the largest coefficient); records its rounding.
+void checkPrecision(const Problem& problem, std::size_t i, std::size_t b, const Box<double>& box,
+                    const Bernstein<double>& form, double bound, EquationRounding& r) {
+  constexpr double kMaxPrecisionLoss = 1e-6;
+  const double proven = FormRounding::relative(form, bound);
+  if (proven <= kProvenRounding) {
+    r.proven = std::max(r.proven, proven);
+    return;
+  }
+  r.allProven = false;
+  const double loss = b < kPrecisionBoxes ? precisionLoss(problem.equations[i], box, form) : 0.0;
+  r.measured = std::max(r.measured, loss);
+  if (loss > kMaxPrecisionLoss) {
+    std::ostringstream o;
+    o << problem.path << ": equation " << i + 1 << " loses its precision in double "
+      << "arithmetic (its Bernstein coefficients are off by " << loss
+      << " of the largest, against 128-bit arithmetic): use --scalar mpfr, or expand and "
+      << "simplify it";
+    throw InputError(o.str());
+  }
+}
+
 /// Refuses equations whose Bernstein form on the domain (or on a B-spline patch) is zero (the
 /// equation vanishes there: its zero set fills the region, `x - x`), not finite in double, or,
 /// in a double run, so large that subdividing it would overflow (1e308 * x^2 + ...) or so
-/// inexact that its zero set is noise (precisionLoss above 1e-6, checked on the first 8 boxes).
+/// inexact that its zero set is noise (checkPrecision).
 template <class S>
-std::vector<double> checkEquations(const Problem& problem, const Box<S>& domain) {
-  constexpr double kMaxPrecisionLoss = 1e-6;
-  constexpr std::size_t kPrecisionBoxes = 8;
+std::vector<EquationRounding> checkEquations(const Problem& problem, const Box<S>& domain) {
   constexpr double kLimit = 1e300;
   std::vector<Box<S>> boxes;
   if (problem.roots.empty()) boxes.push_back(domain);
   for (const Box<double>& patch : problem.roots) boxes.push_back(toScalar<S>(patch));
-  std::vector<double> losses(problem.equations.size(), 0.0);
+  std::vector<EquationRounding> rounding(problem.equations.size());
   for (std::size_t i = 0; i < problem.equations.size(); ++i) {
     for (std::size_t b = 0; b < boxes.size(); ++b) {
       const Box<S>& box = boxes[b];
-      const Bernstein<S> form = problem.equations[i].template toBernstein<S>(box);
+      Bernstein<S> form;
       if constexpr (std::is_same_v<S, double>) {
-        const double loss =
-            b < kPrecisionBoxes ? precisionLoss(problem.equations[i], box, form) : 0.0;
-        losses[i] = std::max(losses[i], loss);
-        if (loss > kMaxPrecisionLoss) {
-          std::ostringstream o;
-          o << problem.path << ": equation " << i + 1 << " loses its precision in double "
-            << "arithmetic (its Bernstein coefficients are off by " << loss
-            << " of the largest, against 128-bit arithmetic): use --scalar mpfr, or expand and "
-            << "simplify it";
-          throw InputError(o.str());
-        }
+        double bound = 0;
+        form = problem.equations[i].toBernstein(box, bound);
+        checkPrecision(problem, i, b, box, form, bound, rounding[i]);
+      } else {
+        form = problem.equations[i].template toBernstein<S>(box);
       }
       bool zero = true;
       for (const S& c : form.coefficients()) {
@@ -280,16 +313,18 @@ std::vector<double> checkEquations(const Problem& problem, const Box<S>& domain)
                          ": its zero set is a region, not a hypersurface");
     }
   }
-  return losses;
+  return rounding;
 }
 
 /// The rounding bound of each equation's Bernstein coefficients (relative to the largest) that
-/// the certificate assumes: in double the measured loss against 128-bit arithmetic, with a
-/// factor of 4 for the boxes not measured (B-spline patches beyond the first 8); in MPFR the
-/// conversion is exact to far below what any certificate resolves.
-std::vector<double> coefficientErrors(const std::vector<double>& losses) {
+/// the certificate assumes: the proven bound where every box had one; otherwise also the
+/// measured loss against 128-bit arithmetic with a factor of 4 for the boxes not measured
+/// (B-spline patches beyond the first 8). In MPFR the conversion is exact to far below what
+/// any certificate resolves (all zero).
+std::vector<double> coefficientErrors(const std::vector<EquationRounding>& rounding) {
   std::vector<double> out;
-  for (double loss : losses) out.push_back(4 * loss);
+  for (const EquationRounding& r : rounding)
+    out.push_back(r.allProven ? r.proven : std::max(r.proven, 4 * r.measured));
   return out;
 }
 
@@ -487,7 +522,7 @@ RunResult run(const Problem& problem, const Settings& settings, const StrategyCh
   const Grid grid = makeGrid(problem, settings);
   const Box<S> domain = toScalar<S>(grid.domain);
   const System<S> system(problem);
-  const std::vector<double> losses = checkEquations<S>(problem, domain);
+  const std::vector<EquationRounding> rounding = checkEquations<S>(problem, domain);
   checkPiecewiseSettings(problem, settings);
   // One bounding over the domain, or one per B-spline patch (built in subdividePatches).
   const std::optional<Bounding<S>> bounding =
@@ -518,7 +553,7 @@ RunResult run(const Problem& problem, const Settings& settings, const StrategyCh
   input.refine = [&](const Box<double>& cell) {
     return refineCell<S>(problem, settings, subdivision, cell);
   };
-  input.coefficientError = coefficientErrors(losses);
+  input.coefficientError = coefficientErrors(rounding);
   ConnectionOutput<S> connected = connect<S>(connection, input);
   summary.tConnection = secondsSince(t);
   recordTopology<S>(summary, connected, choices.connection, settings.depth);
