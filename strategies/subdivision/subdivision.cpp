@@ -85,11 +85,18 @@ class Traversal {
     report(1.0);
   }
 
-  /// The top of a parallel traversal: like run(), but the kept boxes of depth `depth` (below
+  /// A stage of the top of a parallel traversal: like run() from the root (`from` null) or
+  /// from the kept box `from` of depth `fromDepth`, but the kept boxes of depth `depth` (below
   /// the final one) are not expanded; they go to `subtrees` in depth-first order.
-  void runTop(int depth, std::vector<Subtree<State>>& subtrees) {
+  void runTop(const Subtree<State>* from, int fromDepth, int depth,
+              std::vector<Subtree<State>>& subtrees) {
     stopAt_ = depth;
     subtrees_ = &subtrees;
+    if (from) {
+      index_ = from->index;
+      descend(from->state, fromDepth);
+      return;
+    }
     State root;
     bounding_.root(root);
     if (keep(root, 0)) descend(root, 0);
@@ -102,9 +109,6 @@ class Traversal {
     index_ = top.index;
     descend(top.state, depth);
   }
-
-  /// The volume share of the boxes finished so far (discarded, or solution cells).
-  double doneVolume() const { return doneVolume_; }
 
  private:
   //! [zerosetsubdiv]
@@ -192,24 +196,57 @@ int topDepth(const Grid& grid) {
   return depth > 0 ? depth : -1;
 }
 
+/// The kept boxes of depth `top`, in depth-first order, by stages of n halvings: the first
+/// from the root in the calling thread, each later one with the boxes of the stage before as
+/// parallel tasks (their lists appended in order). So the top is sequential only down to
+/// depth n; `visited` counts its bounded boxes.
+template <class B, class D>
+std::vector<Subtree<typename B::State>> topSubtrees(const B& bounding, const D& subdivision,
+                                                    const Grid& grid, int top,
+                                                    std::int64_t& visited) {
+  using State = typename B::State;
+  const Progress none;
+  std::vector<Subtree<State>> subtrees;
+  CellList head{grid.n};
+  Traversal<B, D, CellList> first(bounding, subdivision, grid, none, head, 0);
+  first.runTop(nullptr, 0, std::min(grid.n, top), subtrees);
+  visited += head.visited;
+  for (int from = grid.n; from < top; from += grid.n) {
+    const int to = std::min(from + grid.n, top);
+    std::vector<std::vector<Subtree<State>>> next(subtrees.size());
+    std::vector<std::int64_t> counts(subtrees.size(), 0);
+    parallelFor(subtrees.size(), [&](std::size_t i) {
+      const B local = bounding;  // the bounding's scratch is per instance
+      CellList part{grid.n};
+      Traversal<B, D, CellList> t(local, subdivision, grid, none, part, 0);
+      t.runTop(&subtrees[i], from, to, next[i]);
+      counts[i] = part.visited;
+    });
+    subtrees.clear();
+    for (std::size_t i = 0; i < next.size(); ++i) {
+      visited += counts[i];
+      for (Subtree<State>& box : next[i]) subtrees.push_back(std::move(box));
+    }
+  }
+  return subtrees;
+}
+
 /// ZeroSetSubdiv with the subtrees below topDepth as parallel tasks (framework/core/
-/// parallel.hpp): the top is traversed sequentially, each subtree writes its own CellList, and
-/// the lists are appended in depth-first order of their roots. So the cells, their order and
-/// `visited` are those of the sequential traversal, and the budget is exceeded in the same
-/// runs (the cells are counted across subtrees).
+/// parallel.hpp): the top is traversed in stages (topSubtrees), each subtree writes its own
+/// CellList, and the lists are appended in depth-first order of their roots. So the cells,
+/// their order and `visited` are those of the sequential traversal, and the budget is exceeded
+/// in the same runs (the cells are counted across subtrees; the top holds none).
 template <class B, class D>
 void parallelTraversal(const B& bounding, const D& subdivision, const Grid& grid,
                        const Progress& progress, SolutionCells& cells, std::int64_t maxCells,
                        int top) {
-  using State = typename B::State;
-  std::vector<Subtree<State>> subtrees;
-  Traversal<B, D, SolutionCells> head(bounding, subdivision, grid, progress, cells, maxCells);
-  head.runTop(top, subtrees);
+  const auto subtrees = topSubtrees(bounding, subdivision, grid, top, cells.visited);
   std::vector<CellList> parts(subtrees.size(), CellList{grid.n});
   std::atomic<std::int64_t> found{0};
   std::atomic<std::size_t> finished{0};
   const auto caller = std::this_thread::get_id();
-  const double share = std::ldexp(1.0, -top), before = head.doneVolume();
+  // The top finished all of the domain but the subtrees' boxes.
+  const double share = std::ldexp(1.0, -top), before = 1 - double(subtrees.size()) * share;
   const Progress none;
   parallelFor(subtrees.size(), [&](std::size_t i) {
     const B local = bounding;  // the bounding's scratch is per instance
