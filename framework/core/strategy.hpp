@@ -51,7 +51,8 @@ template <class S>
 using Projector = std::function<ProjectedPoint<S>(std::span<S> x)>;
 
 /// Classification of one solution cell from its closed box and its projected point.
-/// Models: PaperClassification.
+/// Models: PaperClassification. `classify` is const and called for many cells at once, from
+/// the run's threads (ndc::classifyCells), so it must not write shared state.
 template <class C, class S>
 concept ClassificationStrategy = requires(const C c, const Box<S>& cell, std::span<const S> point,
                                           bool converged) {

@@ -477,19 +477,26 @@ template <class S>
 void writeBack(RunResult& result, const Complex<S>& welded, const SolutionCells& cells,
                const Grid& grid, const Box<S>& domain, const Projections<S>& projections,
                const std::vector<CellClass>& classes) {
-  const int n = grid.n;
+  const auto n = static_cast<std::size_t>(grid.n);
+  result.vertices.reserve(welded.vertices.size());
   for (const S& v : welded.vertices) result.vertices.push_back(toDouble(v));
   result.simplices = welded.simplices;
   result.summary.mesh.orientable = orientSimplices(result.k, result.simplices);
   result.cellIndex = cells.index;
   result.cellClass = classes;
-  for (std::size_t c = 0; c < cells.size(); ++c) {
-    const Box<S> box = cellBox(grid, domain, cells.cell(c));
-    for (int j = 0; j < n; ++j) {
-      result.cellCentre.push_back(toDouble(S((box.lo[j] + box.hi[j]) / 2)));
-      result.cellPoint.push_back(toDouble(projections.at(c)[j]));
-    }
-  }
+  // Each cell writes its own slots.
+  result.cellCentre.resize(cells.size() * n);
+  result.cellPoint.resize(cells.size() * n);
+  parallelFor(
+      cells.size(),
+      [&](std::size_t c) {
+        const Box<S> box = cellBox(grid, domain, cells.cell(c));
+        for (std::size_t j = 0; j < n; ++j) {
+          result.cellCentre[c * n + j] = toDouble(S((box.lo[j] + box.hi[j]) / 2));
+          result.cellPoint[c * n + j] = toDouble(projections.at(c)[j]);
+        }
+      },
+      1024);
 }
 
 /// Application problems: the image map, and where its denominator vanishes on the mesh.

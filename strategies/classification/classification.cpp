@@ -3,6 +3,7 @@
 #include <string>
 
 #include "framework/core/errors.hpp"
+#include "framework/core/parallel.hpp"
 
 namespace ndc {
 
@@ -32,13 +33,17 @@ std::vector<CellClass> classifyCells(const Classification& classification,
                                      const SolutionCells& cells, const Box<S>& domain,
                                      const Projections<S>& projections) {
   std::vector<CellClass> classes(cells.size());
-  // One dispatch for the whole stage, not one per cell.
+  // One dispatch for the whole stage, not one per cell; the cells in parallel, each writing
+  // its own class.
   std::visit(
       [&](const auto& strategy) {
-        for (std::size_t c = 0; c < cells.size(); ++c) {
-          const Box<S> box = cellBox<S>(cells.grid, domain, cells.cell(c));
-          classes[c] = strategy.classify(box, projections.at(c), projections.converged[c] != 0);
-        }
+        parallelFor(
+            cells.size(),
+            [&](std::size_t c) {
+              const Box<S> box = cellBox<S>(cells.grid, domain, cells.cell(c));
+              classes[c] = strategy.classify(box, projections.at(c), projections.converged[c] != 0);
+            },
+            1024);
       },
       classification);
   return classes;
