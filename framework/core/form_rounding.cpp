@@ -16,8 +16,11 @@ constexpr double kTiny = 0x1p-1074;     // an underflowing product's absolute er
 constexpr double kUp = 1 + 16 * kUnit;  // covers the rounding of the bound's own sums
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-/// gamma_k = k u / (1 - k u), rounded up.
-double gamma(double k) { return k * kUnit / (1 - k * kUnit) * kUp; }
+/// gamma_k = k u / (1 - k u), rounded up; infinite where k u is not small (no bound).
+double gamma(double k) {
+  if (!(k * kUnit < 0.5)) return kInf;
+  return k * kUnit / (1 - k * kUnit) * kUp;
+}
 
 double largest(const Bernstein<double>& f) {
   double m = 0;
@@ -25,8 +28,7 @@ double largest(const Bernstein<double>& f) {
   return std::isfinite(m) ? m : kInf;  // NaN counts as infinite
 }
 
-/// The largest entry of Pascal's row d (exact in double for the degrees used), and whether the
-/// row scales exactly (only 1 and 2: degree at most 2).
+/// The largest entry of Pascal's row d (exact in double for the degrees used).
 double largestBinomial(int d) {
   double c = 1;
   for (int i = 1; i <= d / 2; ++i) c = c * (d - i + 1) / i;
@@ -103,9 +105,11 @@ double FormRounding::productBound(const Bernstein<double>& a, double ea, const B
   }
   rounding += terms;
   // |sum w (a + da)(b + db) - sum w a b| <= ea mb + (ma + ea) eb, the weights summing to 1;
-  // an underflowing scaling or product errs by kTiny, scaled at most by the other factor.
+  // an underflowing scaling (by any factor but 1, powers of 2 included), product or division
+  // errs by kTiny, scaled at most by the other factor.
   const double propagated = ea * mb + (ma + ea) * eb;
-  const double underflow = rounding * kTiny * (1 + ca * ma) * (1 + cb * mb);
+  const double multiplications = 3.0 * a.dim() + terms;
+  const double underflow = multiplications * kTiny * (1 + ca * ma) * (1 + cb * mb);
   return (propagated + gamma(rounding) * ma * mb + underflow) * kUp;
 }
 

@@ -15,6 +15,8 @@ namespace ndc {
 /// breadth-first order. Facets shared by three or more simplices (non-manifold) do not propagate.
 /// Returns false when some component cannot be oriented (a Möbius band or Klein bottle): its
 /// simplices are then left as the search oriented them, consistent along a spanning tree.
+/// The vertex numbers are those of a mesh (0 to its vertex count - 1): the facets are sorted by
+/// counting over them.
 bool orientSimplices(int k, std::vector<std::int32_t>& simplices);
 
 }  // namespace ndc
