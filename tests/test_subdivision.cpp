@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "framework/applications/load.hpp"
+#include "framework/core/parallel.hpp"
 #include "framework/core/problem.hpp"
 #include "strategies/bounding/bounding.hpp"
 #include "strategies/subdivision/subdivision.hpp"
@@ -263,6 +264,73 @@ TEMPLATE_TEST_CASE("subdivision keeps every cell the manifold meets", "[subdivis
   }
 }
 //! [subdivision-conservative]
+
+namespace {
+
+/// ZeroSetSubdiv as a plain recursion (the reference for subdivide's staged parallel
+/// traversal): the solution cells' indices in depth-first order, lower child first, and the
+/// count of bounded boxes.
+template <class B, class D>
+void referenceTraversal(const B& bounding, const D& subdivision, int n, int depth,
+                        const typename B::State& state, int d, std::vector<std::int32_t>& index,
+                        std::vector<std::int32_t>& cells, std::int64_t& visited) {
+  if (subdivision.boundsAfter(d, n)) {
+    ++visited;
+    if (!bounding.mayContainZero(state)) return;
+  }
+  if (d == n * depth) {
+    cells.insert(cells.end(), index.begin(), index.end());
+    return;
+  }
+  const int axis = d % n;
+  typename B::State lower, upper;
+  bounding.halve(state, axis, lower, upper);
+  index[axis] *= 2;
+  referenceTraversal(bounding, subdivision, n, depth, lower, d + 1, index, cells, visited);
+  ++index[axis];
+  referenceTraversal(bounding, subdivision, n, depth, upper, d + 1, index, cells, visited);
+  index[axis] /= 2;
+}
+
+}  // namespace
+
+TEMPLATE_TEST_CASE(
+    "the parallel traversal gives the depth-first traversal's cells, order and "
+    "visited count",
+    "[subdivision]", NDC_SCALARS) {
+  // subdivide hands the top 3n halvings to tasks in stages of n (depth >= 4 has two stages or
+  // more); on any number of threads the output must be the plain recursion's.
+  ndc::test::PrecisionScope<TestType> scope(128);
+  for (const Case& c : cases<TestType>()) {
+    for (const char* bounding : {"bernstein", "linearized"}) {
+      for (const char* subdivision : {"binary", "uniform"}) {
+        DYNAMIC_SECTION(c.manifold.name << " " << bounding << " " << subdivision) {
+          const Problem& problem = c.manifold.problem;
+          const int n = problem.n();
+          const ndc::Bounding<TestType> b =
+              ndc::createBounding<TestType>(bounding, problem, problem.domainAs<TestType>());
+          std::vector<std::int32_t> cells, index(static_cast<std::size_t>(n), 0);
+          std::int64_t visited = 0;
+          std::visit(
+              [&](const auto& model, const auto& d) {
+                typename std::decay_t<decltype(model)>::State root;
+                model.root(root);
+                referenceTraversal(model, d, n, c.depth, root, 0, index, cells, visited);
+              },
+              b, ndc::createSubdivision(subdivision));
+          for (int threads : {1, 2, 3}) {
+            const SolutionCells found = ndc::withThreads(
+                threads, [&] { return solve<TestType>(problem, bounding, subdivision, c.depth); });
+            INFO(threads << " threads: " << found.size() << " cells, visited " << found.visited
+                         << "; reference " << cells.size() / n << ", " << visited);
+            CHECK(found.index == cells);
+            CHECK(found.visited == visited);
+          }
+        }
+      }
+    }
+  }
+}
 
 //! [uniform-vs-binary]
 TEMPLATE_TEST_CASE("uniform and binary subdivision give the same solution cells", "[subdivision]",
