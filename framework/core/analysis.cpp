@@ -376,11 +376,21 @@ template <class S>
 MeshStats analyse(const Complex<S>& welded, const System<S>& system, const Projector<S>& project) {
   MeshStats stats;
   stats.vertices = static_cast<std::int64_t>(welded.vertexCount());
-  const EdgeCounts edges = countEdges(welded, stats);
-  if (welded.k == 1) curveTopology(edges, welded.vertexCount(), stats);
-  if (welded.k == 2) surfaceTopology(edges, welded.vertexCount(), welded.simplexCount(), stats);
-  if (welded.k >= 3) higherTopology(welded, stats);
-  accuracy(welded, system, project, stats);
+  // The topology's counting (mostly sequential) beside the accuracy's projections (parallel):
+  // both only read the mesh, and they write different fields.
+  MeshStats measured;
+  TaskBeside topology;
+  topology.start([&welded, &stats] {
+    const EdgeCounts edges = countEdges(welded, stats);
+    if (welded.k == 1) curveTopology(edges, welded.vertexCount(), stats);
+    if (welded.k == 2) surfaceTopology(edges, welded.vertexCount(), welded.simplexCount(), stats);
+    if (welded.k >= 3) higherTopology(welded, stats);
+  });
+  accuracy(welded, system, project, measured);
+  topology.wait();
+  stats.maxResidual = measured.maxResidual;
+  stats.maxChordError = measured.maxChordError;
+  stats.chordFailures = measured.chordFailures;
   return stats;
 }
 

@@ -472,7 +472,8 @@ Complex<S> weldAtSingularPoints(Complex<S>& complex, const std::vector<SingularP
   return weld<S>(complex, 1e-9 * diameter);
 }
 
-/// The outputs in double: the welded mesh and the per-cell data.
+/// The outputs in double: the welded mesh (its simplices oriented by the caller) and the
+/// per-cell data.
 template <class S>
 void writeBack(RunResult& result, const Complex<S>& welded, const SolutionCells& cells,
                const Grid& grid, const Box<S>& domain, const Projections<S>& projections,
@@ -480,8 +481,6 @@ void writeBack(RunResult& result, const Complex<S>& welded, const SolutionCells&
   const auto n = static_cast<std::size_t>(grid.n);
   result.vertices.reserve(welded.vertices.size());
   for (const S& v : welded.vertices) result.vertices.push_back(toDouble(v));
-  result.simplices = welded.simplices;
-  result.summary.mesh.orientable = orientSimplices(result.k, result.simplices);
   result.cellIndex = cells.index;
   result.cellClass = classes;
   // Each cell writes its own slots.
@@ -571,7 +570,16 @@ RunResult run(const Problem& problem, const Settings& settings, const StrategyCh
       findSingularPoints<S>(problem, system, cells, projections, domain).points;
   const Complex<S> welded =
       weldAtSingularPoints<S>(connected.complex, summary.singularPoints, grid);
+  // The orientation of the output's simplices beside the analysis, which reads neither them
+  // nor the flag (a sequential search that would otherwise follow the parallel analysis).
+  result.simplices = welded.simplices;
+  bool orientable = true;
+  TaskBeside orientation;
+  orientation.start(
+      [&result, &orientable] { orientable = orientSimplices(result.k, result.simplices); });
   summary.mesh = analyse<S>(welded, system, project);
+  orientation.wait();
+  summary.mesh.orientable = orientable;
   summary.tAnalysis = secondsSince(t);
   checkCertificate(summary);
 
