@@ -18,12 +18,17 @@ CellTree::CellTree(const Grid& base, int maxLevel)
   internal_.resize(grids_.size());
 }
 
-void CellTree::reserve(int level, std::size_t count) {
-  leaves_[level - base_].reserve(leaves_[level - base_].size() + count);
-  level_.reserve(level_.size() + count);
-  index_.reserve(index_.size() + count * std::size_t(n_));
-  active_.reserve(active_.size() + count);
-  solution_.reserve(solution_.size() + count);
+void CellTree::addBaseCells(const SolutionCells& cells) {
+  if (size() != 0 || cells.grid.n != n_ || cells.grid.depth != base_)
+    throw std::invalid_argument("CellTree::addBaseCells: not an empty tree of the cells' grid");
+  // The base grid's keys are the cells' keys (the same n and depth), and leaf c is cell c.
+  leaves_[0] = cells.lookup;
+  level_.assign(cells.size(), static_cast<std::int8_t>(base_));
+  index_ = cells.index;
+  active_.assign(cells.size(), 1);
+  solution_.assign(cells.size(), 1);
+  solutionLeaves_ = cells.size();
+  baseCells_ = static_cast<std::int32_t>(cells.size());
 }
 
 std::int32_t CellTree::addLeaf(int level, std::span<const std::int32_t> index, bool solution) {

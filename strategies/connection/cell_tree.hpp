@@ -37,8 +37,9 @@ class CellTree {
   /// The grid of level `level` (same domain, 2^level cells per axis).
   const Grid& grid(int level) const { return grids_[level - base_]; }
 
-  /// Room for `count` more leaves of `level` without growing (before adding the base cells).
-  void reserve(int level, std::size_t count);
+  /// Adds the solution cells of the base grid as leaves 0 .. cells.size() - 1 of an empty tree,
+  /// each with its cell number (baseCell): their lookup is a copy of the cells' own.
+  void addBaseCells(const SolutionCells& cells);
   /// Adds a leaf (its key must be new at its level); returns its number.
   std::int32_t addLeaf(int level, std::span<const std::int32_t> index, bool solution);
   /// Refines an active leaf: it becomes internal; `solution[c]` says whether child c (bit j:
@@ -63,7 +64,6 @@ class CellTree {
   std::int32_t baseCell(std::int32_t leaf) const {
     return leaf < baseCells_ && level_[leaf] == base_ ? leaf : -1;
   }
-  void setBaseCells(std::int32_t count) { baseCells_ = count; }
 
  private:
   int n_, base_, maxLevel_;

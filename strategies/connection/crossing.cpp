@@ -575,6 +575,24 @@ class AdaptiveCrossing {
     bool ready = false;
   };
 
+  /// A block certified by a task of mergeBlocks, before it is numbered.
+  struct NewBlock {
+    std::int32_t leaf = -1;  ///< the leaf that made it
+    int level = 0;
+    bool tentative = false;
+    std::vector<std::int32_t> lo, members;
+    std::vector<CellKey> empties;
+    std::vector<Failure> saved;  ///< the members' failures before
+  };
+
+  /// A task of mergeBlocks: the scratch of a block's graph tests and the blocks it made.
+  struct BlockWork {
+    std::vector<Bernstein<S>> patches;
+    std::vector<Interval<S>> jacobian;
+    GraphTest<S> test;
+    std::vector<NewBlock> made;
+  };
+
   const RootForms& rootForms(std::span<const std::int32_t> index, int level) {
     const std::vector<Bernstein<S>>& forms = cellForms_.root(index, level);
     auto it = rootForms_.find(&forms);
@@ -594,21 +612,10 @@ class AdaptiveCrossing {
     return cellBox(tree_.grid(tree_.level(leaf)), domain_, tree_.index(leaf));
   }
 
-  /// The leaf's Bernstein patches (into patches_) and whether they prove that M_c does not
-  /// meet the closed leaf (then no face of it is crossed); bandEmpty_ records whether no level
-  /// set F = t c, t in [0, 1], meets it either (M itself, and the isotopy from M to M_c).
-  bool restrictTo(std::int32_t leaf) {
-    const RootForms& rf = rootForms(tree_.index(leaf), tree_.level(leaf));
-    margins_ = rf.margins;
-    bool band = false;
-    const bool empty = restrictLeaf(leaf, rf, patches_, band);
-    bandEmpty_.resize(tree_.size(), 0);
-    bandEmpty_[leaf] = band;
-    return empty;
-  }
-
-  /// restrictTo without its side effects (safe in parallel tasks): the leaf's patches into
-  /// `patches`, whether M_c misses the closed leaf (returned) and whether the band does.
+  /// The leaf's Bernstein patches into `patches`, whether they prove that M_c misses the
+  /// closed leaf (returned; then no face of it is crossed) and whether no level set
+  /// F = t c, t in [0, 1], meets it either (`band`: M itself, and the isotopy from M to M_c).
+  /// Reads only: safe in parallel tasks.
   bool restrictLeaf(std::int32_t leaf, const RootForms& rf, std::vector<Bernstein<S>>& patches,
                     bool& band) const {
     const Box<S> box = leafBox(leaf);
@@ -1358,9 +1365,6 @@ class AdaptiveCrossing {
                          std::span<const int>(all), jacobian, fy, excluded, false);
   }
 
-  /// The graph test of the box of patches_.
-  bool patchesGraph() { return graphOf(patches_, margins_, jacobian_, graphTest_); }
-
   /// The graph test of the box of `patches` (jacobian: scratch; test: graphTest_ or a copy).
   bool graphOf(const std::vector<Bernstein<S>>& patches, std::span<const S> margins,
                std::vector<Interval<S>>& jacobian, GraphTest<S>& test) const {
@@ -1436,13 +1440,8 @@ class AdaptiveCrossing {
     return axes;
   }
 
-  /// The faces of the box of patches_ that fail the face graph test, as (fixed axis, upper):
-  /// every one, or (`all` false) the first.
-  std::vector<std::pair<int, bool>> failingFaces(bool all = true) {
-    return failingFacesOf(patches_, margins_, all, jacobian_, graphTest_);
-  }
-
-  /// failingFaces of the box of `patches` (jacobian: scratch; test: graphTest_ or a copy).
+  /// The faces of the box of `patches` that fail the face graph test, as (fixed axis, upper):
+  /// every one, or (`all` false) the first (jacobian: scratch; test: graphTest_ or a copy).
   std::vector<std::pair<int, bool>> failingFacesOf(const std::vector<Bernstein<S>>& patches,
                                                    std::span<const S> margins, bool all,
                                                    std::vector<Interval<S>>& jacobian,
@@ -1459,16 +1458,18 @@ class AdaptiveCrossing {
     return failing;
   }
 
-  /// The first face (2 a + side) of the box of patches_ that fails the face graph test, or -1.
+  /// The first face (2 a + side) of a failingFacesOf list, or -1.
   static int firstFailing(const std::vector<std::pair<int, bool>>& failing) {
     return failing.empty() ? -1 : 2 * failing.front().first + int(failing.front().second);
   }
 
   /// Face (a, upper) of the block (level, lo) leaf face by leaf face: no unproven face inside
   /// it (its crossings on the leaf faces' common edges are proven, so the link sees every
-  /// piece of M on it) and each leaf face empty or a graph. Leaves patches_ changed.
+  /// piece of M on it) and each leaf face empty or a graph. `rf`: the block's root forms (its
+  /// leaves'); w.patches changed.
   bool subFacesGraph(int level, const std::vector<std::int32_t>& lo,
-                     const std::vector<std::int32_t>& members, int a, bool upper) {
+                     const std::vector<std::int32_t>& members, int a, bool upper,
+                     const RootForms& rf, BlockWork& w) {
     const std::vector<int> axes = freeAxes(a);
     for (std::int32_t c : members) {
       if (tree_.index(c)[a] != (upper ? lo[a] + 1 : lo[a])) continue;
@@ -1476,16 +1477,12 @@ class AdaptiveCrossing {
         bool up = false;
         if (blockFaceAxis(unprovenFaces_[f], level, lo, up) == a && up == upper) return false;
       }
-      restrictTo(c);
-      if (!faceGraph(a, upper, axes)) return false;
+      bool band = false;
+      restrictLeaf(c, rf, w.patches, band);
+      bandEmpty_[c] = band;  // c is this task's (mergeBlocks)
+      if (!faceGraphOf(w.patches, rf.margins, a, upper, axes, w.jacobian, w.test)) return false;
     }
     return true;
-  }
-
-  /// The graph test of one face of the leaf in patches_ (fixed axis a at its lower or upper
-  /// end): empty, or a graph over one of the free axes.
-  bool faceGraph(int a, bool upper, const std::vector<int>& axes) {
-    return faceGraphOf(patches_, margins_, a, upper, axes, jacobian_, graphTest_);
   }
 
   /// faceGraph on the box of `patches` (jacobian: scratch; test: graphTest_ or a copy).
@@ -1521,7 +1518,7 @@ class AdaptiveCrossing {
     const std::vector<const RootForms*> forms = rootFormsOf(leaves);
     parallelFor(leaves.size(),
                 [&](std::size_t i) { certifyLeaf(leaves[i], *forms[i], incident[leaves[i]]); });
-    mergeBlocks(incident);
+    mergeBlocks(incident, leaves, forms);
   }
 
   /// The certificate of active leaf c into failure_[c]. It writes only what belongs to c (its
@@ -1569,28 +1566,132 @@ class AdaptiveCrossing {
   /// and the polygons around the unproven face join two block nodes only, which the mesh
   /// drops) and its link, with every block one node, is one cycle. verifyBlocks dissolves the
   /// blocks that do not stand until the rest do.
-  void mergeBlocks(const Incidence& incident) {
+  ///
+  /// The leaves are tried in order, as one sequential loop would, but in parallel by clusters
+  /// (blockClusters): a leaf's blocks lie within one leaf of it, so leaves of different clusters
+  /// never compete for a leaf, and each cluster's leaves in order give the blocks the loop
+  /// would. The blocks are numbered in the order of the leaves that made them.
+  /// `leaves`: the active leaves in order, `forms` their root forms.
+  void mergeBlocks(const Incidence& incident, const std::vector<std::int32_t>& leaves,
+                   const std::vector<const RootForms*>& forms) {
     blocks_.clear(), blockLo_.clear(), blockLevel_.clear(), blockSaved_.clear();
     blockEmpties_.clear();
     block_.assign(tree_.size(), -1);
     unprovenOf_.resize(tree_.size());
+    bandEmpty_.resize(tree_.size(), 0);
+    // The leaves that try blocks, with their root forms: a leaf whose own graph test fails
+    // does not (the graph test on a block around it would fail too, on a wider box with wider
+    // Jacobian enclosures; only refinement can help).
+    std::vector<std::int32_t> trying;
+    std::vector<const RootForms*> tryingForms;
+    for (std::size_t i = 0; i < leaves.size(); ++i) {
+      const Failure f = failure_[leaves[i]];
+      if (f == Failure::kNone || f == Failure::kGraph) continue;
+      trying.push_back(leaves[i]);
+      tryingForms.push_back(forms[i]);
+    }
+    const std::vector<std::vector<std::int32_t>> clusters = blockClusters(trying);
+    std::vector<BlockWork> work(clusters.size(), BlockWork{{}, {}, graphTest_, {}});
+    parallelFor(clusters.size(), [&](std::size_t k) {
+      for (const std::int32_t i : clusters[k]) {
+        const std::int32_t c = trying[i];
+        if (block_[c] >= 0) continue;  // in a block of an earlier leaf of the cluster
+        blocksOf(c, *tryingForms[i], incident, work[k]);
+      }
+    });
     bool tentative = false;
-    for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
-      if (!tree_.active(c) || failure_[c] == Failure::kNone || block_[c] >= 0) continue;
-      // A leaf whose own graph test fails: the graph test on a block around it would too
-      // (a wider box, wider Jacobian enclosures); only refinement can help.
-      if (failure_[c] == Failure::kGraph) continue;
-      const auto candidates = blockCandidates(c);
-      bool made = false;
-      for (const std::vector<std::int32_t>& lo : candidates) {
-        if ((made = tryBlock(tree_.level(c), lo, incident, false))) break;
-      }
-      for (const std::vector<std::int32_t>& lo : made ? decltype(candidates){} : latticeBlocks(c)) {
-        if ((made = tryBlock(tree_.level(c), lo, incident, true))) break;
-      }
-      tentative = tentative || made;
+    for (const NewBlock& b : orderedBlocks(work)) {
+      for (std::int32_t c : b.members) block_[c] = static_cast<std::int32_t>(blocks_.size());
+      blocks_.push_back(b.members);
+      blockLo_.push_back(b.lo);
+      blockLevel_.push_back(b.level);
+      blockEmpties_.push_back(b.empties);
+      blockSaved_.push_back(b.saved);
+      tentative = tentative || b.tentative;
     }
     if (tentative) verifyBlocks(incident);
+  }
+
+  /// The first block that certifies around leaf c (its candidates, then its lattice blocks),
+  /// into w.made.
+  void blocksOf(std::int32_t c, const RootForms& rf, const Incidence& incident, BlockWork& w) {
+    for (const std::vector<std::int32_t>& lo : blockCandidates(c)) {
+      if (tryBlock(c, lo, incident, false, rf, w)) return;
+    }
+    for (const std::vector<std::int32_t>& lo : latticeBlocks(c)) {
+      if (tryBlock(c, lo, incident, true, rf, w)) return;
+    }
+  }
+
+  /// The blocks of mergeBlocks' tasks in the order of the leaves that made them.
+  static std::vector<NewBlock> orderedBlocks(std::vector<BlockWork>& work) {
+    std::vector<NewBlock> all;
+    for (BlockWork& w : work) {
+      for (NewBlock& b : w.made) all.push_back(std::move(b));
+    }
+    std::sort(all.begin(), all.end(),
+              [](const NewBlock& a, const NewBlock& b) { return a.leaf < b.leaf; });
+    return all;
+  }
+
+  /// The axis along which the leaves take the most distinct (level, index) values.
+  int spreadAxis(const std::vector<std::int32_t>& leaves) const {
+    int best = 0;
+    std::size_t most = 0;
+    std::vector<std::pair<int, std::int32_t>> at(leaves.size());
+    for (int j = 0; j < n_; ++j) {
+      for (std::size_t i = 0; i < leaves.size(); ++i)
+        at[i] = {tree_.level(leaves[i]), tree_.index(leaves[i])[j]};
+      std::sort(at.begin(), at.end());
+      const auto distinct =
+          static_cast<std::size_t>(std::unique(at.begin(), at.end()) - at.begin());
+      if (distinct > most) best = j, most = distinct;
+    }
+    return best;
+  }
+
+  /// The leaves of `trying` (positions in it) grouped into clusters, each in order: two leaves
+  /// of one level within two cells of each other along every axis are in one cluster (the
+  /// blocks of each lie within one cell of it, so only such leaves can compete for a leaf).
+  /// The clusters are in the order of their first leaves.
+  std::vector<std::vector<std::int32_t>> blockClusters(
+      const std::vector<std::int32_t>& trying) const {
+    const auto count = static_cast<std::int32_t>(trying.size());
+    // By level, then along the axis where the leaves spread most (a curve of tangency lies in
+    // a grid plane): the leaves near one are a run of this order.
+    const int axis = spreadAxis(trying);
+    std::vector<std::int32_t> order(static_cast<std::size_t>(count));
+    std::iota(order.begin(), order.end(), 0);
+    const auto key = [&](std::int32_t i) {
+      return std::pair{tree_.level(trying[i]), tree_.index(trying[i])[axis]};
+    };
+    std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
+      return std::pair{key(a), a} < std::pair{key(b), b};
+    });
+    UnionFind sets{std::vector<int>(static_cast<std::size_t>(count))};
+    std::iota(sets.parent.begin(), sets.parent.end(), 0);
+    for (std::size_t x = 0; x < order.size(); ++x) {
+      const auto a = tree_.index(trying[order[x]]);
+      for (std::size_t y = x + 1; y < order.size(); ++y) {
+        const auto [level, first] = key(order[y]);
+        if (level != key(order[x]).first || first > a[axis] + 2) break;
+        const auto b = tree_.index(trying[order[y]]);
+        bool near = true;
+        for (int j = 0; j < n_ && near; ++j) near = std::abs(a[j] - b[j]) <= 2;
+        if (near) sets.unite(order[x], order[y]);
+      }
+    }
+    std::vector<std::vector<std::int32_t>> clusters;
+    std::vector<std::int32_t> clusterOf(static_cast<std::size_t>(count), -1);
+    for (std::int32_t i = 0; i < count; ++i) {
+      std::int32_t& k = clusterOf[sets.find(i)];
+      if (k < 0) {
+        k = static_cast<std::int32_t>(clusters.size());
+        clusters.emplace_back();
+      }
+      clusters[k].push_back(i);
+    }
+    return clusters;
   }
 
   /// The blocks for leaf c on a curve of tangency: for each grid plane next to c that holds
@@ -1750,8 +1851,11 @@ class AdaptiveCrossing {
   /// The certificate of the block of 2^n leaves of `level` with lower corner `lo`: its leaves
   /// free, one polynomial piece, every unproven face inside it, the crossings on its boundary
   /// one simple piece, and the graph and face graph tests on its box.
-  bool tryBlock(int level, const std::vector<std::int32_t>& lo, const Incidence& incident,
-                bool tentative) {
+  /// Leaf c's try (mergeBlocks' task w): `rf` its root forms, which are the block's; a block
+  /// that certifies takes its members (block_ and failure_) and goes to w.made.
+  bool tryBlock(std::int32_t c, const std::vector<std::int32_t>& lo, const Incidence& incident,
+                bool tentative, const RootForms& rf, BlockWork& w) {
+    const int level = tree_.level(c);
     std::vector<std::int32_t> members;
     std::vector<CellKey> empties;
     if (!blockMembers(level, lo, members, empties)) return false;
@@ -1781,29 +1885,26 @@ class AdaptiveCrossing {
     for (std::int32_t& i : hi) ++i;
     Box<S> box = cellBox(tree_.grid(level), domain_, lo);
     box.hi = cellBox(tree_.grid(level), domain_, hi).hi;
-    const RootForms& rf = rootForms(lo, level);
-    margins_ = rf.margins;
-    patches_.resize(m_);  // restrictTo may not have run (startWindow, certifyLeaf)
-    for (int i = 0; i < m_; ++i) patches_[i] = (*rf.forms)[i].restrict(box);
-    if (!patchesGraph() && !intervalEmpty(box, true)) return false;
+    w.patches.resize(m_);
+    for (int i = 0; i < m_; ++i) (*rf.forms)[i].restrictInto(box, w.patches[i]);
+    if (!graphOf(w.patches, rf.margins, w.jacobian, w.test) && !intervalEmpty(box, true))
+      return false;
     if (k_ == 2) {
       // A face of the block's box that fails as a whole: a tentative block may prove it leaf
       // face by leaf face (subFacesGraph).
-      for (const auto& [a, upper] : failingFaces(tentative)) {
-        if (!tentative || !subFacesGraph(level, lo, members, a, upper)) return false;
+      const auto failing = failingFacesOf(w.patches, rf.margins, tentative, w.jacobian, w.test);
+      for (const auto& [a, upper] : failing) {
+        if (!tentative || !subFacesGraph(level, lo, members, a, upper, rf, w)) return false;
       }
     }
-    std::vector<Failure> saved;
-    for (std::int32_t c : members) {
-      block_[c] = static_cast<std::int32_t>(blocks_.size());
-      saved.push_back(failure_[c]);
-      failure_[c] = Failure::kNone;
+    // The members are taken (block_ >= 0 until mergeBlocks numbers the block).
+    NewBlock b{c, level, tentative, lo, std::move(members), std::move(empties), {}};
+    for (std::int32_t d : b.members) {
+      block_[d] = 0;
+      b.saved.push_back(failure_[d]);
+      failure_[d] = Failure::kNone;
     }
-    blocks_.push_back(std::move(members));
-    blockLo_.push_back(lo);
-    blockLevel_.push_back(level);
-    blockEmpties_.push_back(std::move(empties));
-    blockSaved_.push_back(std::move(saved));
+    w.made.push_back(std::move(b));
     return true;
   }
 
@@ -1937,10 +2038,7 @@ class AdaptiveCrossing {
   /// level (or the leaf budget is spent). Returns the degenerate crossings of the last pass.
   std::int64_t refineAndCertify() {
     tree_ = CellTree(grid_, tree_.maxLevel());
-    tree_.reserve(grid_.depth, in_.cells.size());
-    for (std::size_t c = 0; c < in_.cells.size(); ++c)
-      tree_.addLeaf(grid_.depth, in_.cells.cell(c), true);
-    tree_.setBaseCells(static_cast<std::int32_t>(in_.cells.size()));
+    tree_.addBaseCells(in_.cells);
     faces_.clear();
     empty_.clear(), bandEmpty_.clear(), unproven_.clear(), stuck_.clear(), singular_.clear(),
         graph_.clear(), faceGraph_.clear(), facetsMet_.clear();
@@ -2150,44 +2248,43 @@ class AdaptiveCrossing {
       pieceCount[c] = pieces(c, incident[c], piece, slotOf, ambiguous[c]);
     });
     for (std::uint8_t a : ambiguous) out.ambiguousCells += a;
-    // Dual vertices: the Newton projection of the mean of each piece's crossings.
-    const std::vector<DualVertex> vertices = dualVertices(incident, piece, pieceCount, slotOf);
+    // Dual vertices: the Newton projection of the mean of each piece's crossings, written
+    // into the complex in leaf and piece order.
+    const std::size_t base = out.complex.vertexCount();
+    const std::vector<DualVertex> vertices =
+        dualVertices(incident, piece, pieceCount, slotOf, out.complex);
     std::vector<std::int32_t> firstVertex(count, -1);
-    // Room for every vertex and simplex at once (a quad gives two triangles).
-    out.complex.vertices.reserve(out.complex.vertices.size() + vertices.size() * std::size_t(n_));
-    out.complex.vertexCell.reserve(out.complex.vertexCell.size() + vertices.size());
-    out.complex.simplices.reserve(out.complex.simplices.size() +
-                                  mesh.size() * std::size_t(k_ == 2 ? 2 : 1) * std::size_t(k_ + 1));
-    for (const DualVertex& d : vertices) {
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+      const DualVertex& d = vertices[i];
       if (!d.converged) ++out.offManifoldVertices;  // reported, never written silently off M
-      const std::int32_t v = out.complex.addVertex(d.x, tree_.baseCell(d.leaf));
-      if (d.piece == 0) firstVertex[d.leaf] = v;
+      if (d.piece == 0) firstVertex[d.leaf] = static_cast<std::int32_t>(base + i);
       if (d.piece == 0 && (singular_[d.leaf] || d.singular)) ++out.singularCells;
     }
-    for (std::int32_t p : mesh) addSimplices(polygons_[p], p, firstVertex, piece, out);
+    addSimplices(mesh, firstVertex, piece, out.complex);
   }
 
-  /// A dual vertex: piece `piece` of M in leaf `leaf`, at x.
+  /// A dual vertex: piece `piece` of M in leaf `leaf` (its point is in the complex).
   struct DualVertex {
     std::int32_t leaf = 0;
     std::int32_t piece = 0;
-    std::vector<S> x;        ///< the projection of the mean of its crossings, or that mean
     bool converged = false;  ///< whether the projection converged
-    bool singular = false;   ///< the Jacobian at x is (nearly) rank-deficient
+    bool singular = false;   ///< the Jacobian at the point is (nearly) rank-deficient
   };
 
-  /// The dual vertices in leaf and piece order: the mean of each piece's crossings (summed in
-  /// the order of the leaf's polygons) projected onto M, each leaf's in parallel into its own
-  /// slots.
+  /// The dual vertices in leaf and piece order, appended to `complex`: the mean of each piece's
+  /// crossings (summed in the order of the leaf's polygons) projected onto M, or that mean
+  /// where Newton fails; each leaf's in parallel into its own slots.
   template <class SlotOf>
   std::vector<DualVertex> dualVertices(const Incidence& incident,
                                        const std::vector<std::int32_t>& piece,
                                        const std::vector<std::int32_t>& pieceCount,
-                                       const SlotOf& slotOf) const {
-    std::vector<std::size_t> first(pieceCount.size() + 1, 0);
+                                       const SlotOf& slotOf, Complex<S>& complex) const {
+    std::vector<std::size_t> first(pieceCount.size() + 1, complex.vertexCount());
     for (std::size_t c = 0; c < pieceCount.size(); ++c)
       first[c + 1] = first[c] + std::size_t(pieceCount[c]);
-    std::vector<DualVertex> out(first.back());
+    complex.vertices.resize(first.back() * n_);
+    complex.vertexCell.resize(first.back(), -1);
+    std::vector<DualVertex> out(first.back() - first.front());
     parallelFor(pieceCount.size(), [&](std::size_t c) {
       if (pieceCount[c] == 0) return;
       std::vector<S> sums(std::size_t(pieceCount[c]) * n_, S(0));
@@ -2198,13 +2295,16 @@ class AdaptiveCrossing {
           sums[std::size_t(q) * n_ + j] += rootPoints_[std::size_t(polygons_[p].root) * n_ + j];
         ++counts[q];
       }
+      const auto cell = tree_.baseCell(static_cast<std::int32_t>(c));
       for (int q = 0; q < pieceCount[c]; ++q) {
-        DualVertex& d = out[first[c] + std::size_t(q)];
+        const std::size_t v = first[c] + std::size_t(q);
+        DualVertex& d = out[v - first.front()];
         d.leaf = static_cast<std::int32_t>(c);
         d.piece = q;
-        d.x.resize(n_);
-        for (int j = 0; j < n_; ++j) d.x[j] = sums[std::size_t(q) * n_ + j] / counts[q];
-        projectVertex(d);
+        const std::span<S> x(complex.vertices.data() + v * n_, std::size_t(n_));
+        for (int j = 0; j < n_; ++j) x[j] = sums[std::size_t(q) * n_ + j] / counts[q];
+        complex.vertexCell[v] = cell;
+        projectVertex(d, x);
       }
     });
     return out;
@@ -2213,15 +2313,15 @@ class AdaptiveCrossing {
   /// Projects a dual vertex onto M (keeping the mean where Newton fails) and tests whether
   /// its cell is singular: the Jacobian at the vertex (nearly) rank-deficient relative to the
   /// cell size, as at self-intersections and cone points.
-  void projectVertex(DualVertex& d) const {
-    const std::vector<S> mean = d.x;
-    d.converged = in_.project(d.x).converged;
-    if (!d.converged) d.x = mean;
+  void projectVertex(DualVertex& d, std::span<S> x) const {
+    const std::vector<S> mean(x.begin(), x.end());
+    d.converged = in_.project(x).converged;
+    if (!d.converged) std::copy(mean.begin(), mean.end(), x.begin());
     if (d.piece != 0) return;
     const S width = S(tree_.grid(tree_.level(d.leaf)).cellWidth(0));
     std::optional<JacobianWork<S>> fresh;
     JacobianWork<S>& w = threadScratch<S, JacobianWork<S>>(fresh);
-    w.jacobianAt(in_.system, std::span<const S>(d.x));
+    w.jacobianAt(in_.system, std::span<const S>(x));
     const Vector<S>& sigma = w.singularValues();
     d.singular = sigma(0) == 0 || sigma(m_ - 1) <= sigma(0) * width * 1e-3;
   }
@@ -2282,35 +2382,54 @@ class AdaptiveCrossing {
     return touches(c);
   }
 
-  /// The simplices of one mesh polygon: an edge (k = 1), a triangle, or a quad split along its
-  /// shorter diagonal.
-  void addSimplices(const Polygon& poly, std::int32_t p, const std::vector<std::int32_t>& first,
-                    const std::vector<std::int32_t>& piece, ConnectionOutput<S>& out) const {
+  /// The simplices of the mesh polygons, appended to `complex` in their order, each polygon's
+  /// in parallel into its own slots.
+  void addSimplices(const std::vector<std::int32_t>& mesh, const std::vector<std::int32_t>& first,
+                    const std::vector<std::int32_t>& piece, Complex<S>& complex) const {
+    const auto width = static_cast<std::size_t>(k_ + 1);
+    std::vector<std::size_t> at(mesh.size() + 1, complex.simplices.size());
+    for (std::size_t i = 0; i < mesh.size(); ++i)
+      at[i + 1] = at[i] + width * simplicesOf(polygons_[mesh[i]]);
+    complex.simplices.resize(at.back());
+    parallelFor(
+        mesh.size(),
+        [&](std::size_t i) {
+          writeSimplices(polygons_[mesh[i]], mesh[i], first, piece, complex,
+                         complex.simplices.data() + at[i]);
+        },
+        1024);
+  }
+
+  /// How many simplices a mesh polygon gives: an edge (k = 1), a triangle, or a quad's two.
+  std::size_t simplicesOf(const Polygon& poly) const { return k_ == 1 || poly.size == 3 ? 1 : 2; }
+
+  /// The simplices of one mesh polygon into `slot`: an edge (k = 1), a triangle, or a quad split
+  /// along its shorter diagonal (between the complex's vertices).
+  void writeSimplices(const Polygon& poly, std::int32_t p, const std::vector<std::int32_t>& first,
+                      const std::vector<std::int32_t>& piece, const Complex<S>& complex,
+                      std::int32_t* slot) const {
     std::array<std::int32_t, 4> v{};
     for (int i = 0; i < poly.size; ++i) v[i] = first[poly.node[i]] + piece[p * 4 + i];
-    if (k_ == 1) {
-      out.complex.addSimplex(std::array<std::int32_t, 2>{v[0], v[1]});
-      return;
-    }
-    if (poly.size == 3) {
-      out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[1], v[2]});
-      return;
-    }
+    const auto put = [&slot](std::initializer_list<std::int32_t> simplex) {
+      for (std::int32_t u : simplex) *slot++ = u;
+    };
+    if (k_ == 1) return put({v[0], v[1]});
+    if (poly.size == 3) return put({v[0], v[1], v[2]});
     const auto distance = [&](int a, int b) {
       S sum = 0;
       for (int j = 0; j < n_; ++j) {
-        const S diff = out.complex.vertices[std::size_t(v[a]) * n_ + j] -
-                       out.complex.vertices[std::size_t(v[b]) * n_ + j];
+        const S diff = complex.vertices[std::size_t(v[a]) * n_ + j] -
+                       complex.vertices[std::size_t(v[b]) * n_ + j];
         sum += diff * diff;
       }
       return sum;
     };
     if (distance(0, 2) <= distance(1, 3)) {
-      out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[1], v[2]});
-      out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[2], v[3]});
+      put({v[0], v[1], v[2]});
+      put({v[0], v[2], v[3]});
     } else {
-      out.complex.addSimplex(std::array<std::int32_t, 3>{v[0], v[1], v[3]});
-      out.complex.addSimplex(std::array<std::int32_t, 3>{v[1], v[2], v[3]});
+      put({v[0], v[1], v[3]});
+      put({v[1], v[2], v[3]});
     }
   }
 
@@ -2321,14 +2440,11 @@ class AdaptiveCrossing {
   CellForms<S> cellForms_;  ///< the Bernstein forms of every leaf
   const GeneralPosition<S> position_;
   GraphTest<S> graphTest_;
-  std::vector<Interval<S>> jacobian_;  ///< m x n enclosure for the graph tests
   CellTree tree_;
   std::vector<std::array<int, 2>> fixedAxes_;  ///< the k fixed axes of each kind of m-face
   std::vector<S> level_;                       ///< c of the current attempt
   bool byEvaluation_ = true;  ///< faces and graph tests by evaluation first (no patch leaves)
   std::unordered_map<const std::vector<Bernstein<S>>*, RootForms> rootForms_;
-  std::vector<Bernstein<S>> patches_;  ///< the current leaf's patches
-  std::vector<S> margins_;
   FaceStore<S> faces_;  ///< every solved face
   std::vector<Polygon> polygons_;
   std::vector<S> rootPoints_;
