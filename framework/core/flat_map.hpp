@@ -5,6 +5,7 @@
 /// reads one or two adjacent slots (docs/performance.md).
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <utility>
@@ -73,6 +74,25 @@ class FlatMap {
     ++size_;
     return {&slots_[i].second, true};
   }
+
+  /// Inserts keys known to be new and distinct from several threads at once: the map must
+  /// have room for all of them (reserve), nothing else may run on it meanwhile, and the caller
+  /// adds their number with `addCount` afterwards. A slot is claimed by an atomic exchange of
+  /// its `used` byte, so where a key lands depends on the threads' timing, which no lookup,
+  /// insert or erase can tell (the map has no iteration).
+  void insertNewConcurrently(Key key, V value) {
+    const std::size_t mask = slots_.size() - 1;
+    for (std::size_t i = mixKey(key) & mask;; i = (i + 1) & mask) {
+      std::atomic_ref<std::uint8_t> used(used_[i]);
+      if (used.load(std::memory_order_relaxed) == 0 &&
+          used.exchange(1, std::memory_order_acq_rel) == 0) {
+        slots_[i] = {key, std::move(value)};
+        return;
+      }
+    }
+  }
+  /// Counts `count` keys inserted by insertNewConcurrently.
+  void addCount(std::size_t count) { size_ += count; }
 
   /// Removes key if present; returns whether it was.
   bool erase(Key key) {

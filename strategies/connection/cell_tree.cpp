@@ -21,8 +21,9 @@ CellTree::CellTree(const Grid& base, int maxLevel)
 void CellTree::addBaseCells(const SolutionCells& cells) {
   if (size() != 0 || cells.grid.n != n_ || cells.grid.depth != base_)
     throw std::invalid_argument("CellTree::addBaseCells: not an empty tree of the cells' grid");
-  // The base grid's keys are the cells' keys (the same n and depth), and leaf c is cell c.
-  leaves_[0] = cells.lookup;
+  // The base grid's keys are the cells' keys (the same n and depth), and leaf c is cell c:
+  // the cells' own lookup finds them (leafAt).
+  baseLookup_ = &cells.lookup;
   level_.assign(cells.size(), static_cast<std::int8_t>(base_));
   index_ = cells.index;
   active_.assign(cells.size(), 1);
@@ -60,6 +61,14 @@ std::int32_t CellTree::refine(std::int32_t leaf, const std::vector<std::uint8_t>
   return first;
 }
 
+const std::int32_t* CellTree::leafAt(int level, CellKey key) const {
+  if (level == base_ && baseLookup_) {
+    // A base cell is a leaf until it is refined (then it is internal: inactive).
+    if (const std::int32_t* cell = baseLookup_->find(key)) return active_[*cell] ? cell : nullptr;
+  }
+  return leaves_[level - base_].find(key);
+}
+
 Occupant CellTree::find(int level, std::span<const std::int32_t> index) const {
   Occupant out;
   const std::int64_t top = grid(level).cellsPerAxis();
@@ -89,7 +98,7 @@ Occupant CellTree::find(int level, std::span<const std::int32_t> index) const {
   for (int l = base_; l <= level; ++l) {
     for (int j = 0; j < n_; ++j) at[j] = index[j] >> (level - l);
     const CellKey key = grid(l).pack(at);
-    if (const std::int32_t* leaf = leaves_[l - base_].find(key)) {
+    if (const std::int32_t* leaf = leafAt(l, key)) {
       out.kind = Occupant::Kind::kLeaf;
       out.leaf = *leaf;
       return out;

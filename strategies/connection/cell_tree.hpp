@@ -38,7 +38,8 @@ class CellTree {
   const Grid& grid(int level) const { return grids_[level - base_]; }
 
   /// Adds the solution cells of the base grid as leaves 0 .. cells.size() - 1 of an empty tree,
-  /// each with its cell number (baseCell): their lookup is a copy of the cells' own.
+  /// each with its cell number (baseCell). The tree looks them up in `cells`' own lookup, so
+  /// `cells` must outlive it.
   void addBaseCells(const SolutionCells& cells);
   /// Adds a leaf (its key must be new at its level); returns its number.
   std::int32_t addLeaf(int level, std::span<const std::int32_t> index, bool solution);
@@ -68,7 +69,11 @@ class CellTree {
  private:
   int n_, base_, maxLevel_;
   std::vector<Grid> grids_;
-  std::vector<FlatMap<CellKey, std::int32_t>> leaves_;    // per level - base
+  /// The active leaf of `level` with key `key`, or nullptr.
+  const std::int32_t* leafAt(int level, CellKey key) const;
+
+  const FlatMap<CellKey, std::int32_t>* baseLookup_ = nullptr;  // the base cells' (addBaseCells)
+  std::vector<FlatMap<CellKey, std::int32_t>> leaves_;    // per level - base; base: other leaves
   std::vector<FlatMap<CellKey, std::uint8_t>> internal_;  // per level - base (a set)
   std::vector<std::int8_t> level_;
   std::vector<std::int32_t> index_;

@@ -231,6 +231,29 @@ std::vector<Subtree<typename B::State>> topSubtrees(const B& bounding, const D& 
   return subtrees;
 }
 
+/// The subtrees' cells appended to `cells` in the order of the parts, each part's in parallel
+/// (its index copied and its keys put into the lookup: the cells are distinct).
+void appendParts(const std::vector<CellList>& parts, SolutionCells& cells) {
+  const auto n = static_cast<std::size_t>(cells.grid.n);
+  std::vector<std::size_t> first(parts.size() + 1, cells.size());
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    first[i + 1] = first[i] + parts[i].size();
+    cells.visited += parts[i].visited;
+  }
+  cells.index.resize(first.back() * n);
+  cells.lookup.reserve(first.back());  // room for every key: no rehash while they go in
+  parallelFor(parts.size(), [&](std::size_t i) {
+    const std::vector<std::int32_t>& index = parts[i].index;
+    std::copy(index.begin(), index.end(), cells.index.begin() + std::ptrdiff_t(first[i] * n));
+    for (std::size_t c = 0; c < parts[i].size(); ++c) {
+      const std::span<const std::int32_t> cell(index.data() + c * n, n);
+      cells.lookup.insertNewConcurrently(cells.grid.pack(cell),
+                                         static_cast<std::int32_t>(first[i] + c));
+    }
+  });
+  cells.lookup.addCount(first.back() - first.front());
+}
+
 /// ZeroSetSubdiv with the subtrees below topDepth as parallel tasks (framework/core/
 /// parallel.hpp): the top is traversed in stages (topSubtrees), each subtree writes its own
 /// CellList, and the lists are appended in depth-first order of their roots. So the cells,
@@ -257,15 +280,7 @@ void parallelTraversal(const B& bounding, const D& subdivision, const Grid& grid
     if (progress && std::this_thread::get_id() == caller)
       progress("subdivision", std::min(1.0, before + double(done) * share));
   });
-  std::size_t total = cells.size();
-  for (const CellList& part : parts) total += part.size();
-  cells.index.reserve(total * std::size_t(grid.n));
-  cells.lookup.reserve(total);  // no rehashing while the parts are appended
-  for (const CellList& part : parts) {
-    cells.visited += part.visited;
-    for (std::size_t c = 0; c < part.size(); ++c)
-      cells.add(std::span<const std::int32_t>(part.index.data() + c * grid.n, grid.n));
-  }
+  appendParts(parts, cells);
   if (progress) progress("subdivision", 1.0);
 }
 
