@@ -1,6 +1,7 @@
 // Tests of the analysis stage: welding, topology and accuracy of hand-built complexes.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <string>
@@ -322,6 +323,85 @@ TEMPLATE_TEST_CASE("Welding merges duplicate vertices within tolerance", "[analy
     CHECK(welded.simplexCount() == 1);
     // The first copy keeps its orientation.
     CHECK(welded.simplices == std::vector<std::int32_t>{0, 1, 2});
+  }
+}
+
+/// Greedy welding by brute force: each vertex in order merges into the first vertex kept so
+/// far within `tol` (Euclidean), the kept ones numbered in order; degenerate simplices and
+/// repeated vertex sets (the first copy kept) are dropped.
+template <class S>
+ndc::Complex<S> referenceWeld(const ndc::Complex<S>& c, double tol) {
+  ndc::Complex<S> out;
+  out.n = c.n;
+  out.k = c.k;
+  std::vector<std::int32_t> remap(c.vertexCount());
+  for (std::size_t v = 0; v < c.vertexCount(); ++v) {
+    std::int32_t found = -1;
+    for (std::size_t r = 0; r < out.vertexCount() && found < 0; ++r) {
+      S d2 = 0;
+      for (int j = 0; j < c.n; ++j)
+        d2 += (c.vertex(v)[j] - out.vertex(r)[j]) * (c.vertex(v)[j] - out.vertex(r)[j]);
+      if (d2 <= S(tol) * S(tol)) found = static_cast<std::int32_t>(r);
+    }
+    remap[v] = found >= 0 ? found
+                          : out.addVertex(c.vertex(v), c.vertexCell.empty() ? -1 : c.vertexCell[v]);
+  }
+  std::vector<std::vector<std::int32_t>> seen;
+  const auto width = static_cast<std::size_t>(c.k + 1);
+  for (std::size_t s = 0; s < c.simplexCount(); ++s) {
+    std::vector<std::int32_t> simplex(width);
+    for (std::size_t i = 0; i < width; ++i) simplex[i] = remap[c.simplices[s * width + i]];
+    std::vector<std::int32_t> key = simplex;
+    std::sort(key.begin(), key.end());
+    if (std::adjacent_find(key.begin(), key.end()) != key.end()) continue;
+    if (std::find(seen.begin(), seen.end(), key) != seen.end()) continue;
+    seen.push_back(key);
+    out.addSimplex(simplex);
+  }
+  return out;
+}
+
+TEMPLATE_TEST_CASE("Welding merges like a brute-force greedy weld on generated clusters",
+                   "[analysis][weld]", NDC_SCALARS) {
+  using S = TestType;
+  const double tol = 1e-6;
+  for (int n = 1; n <= 5; ++n) {
+    for (unsigned seed = 0; seed < 4; ++seed) {
+      CAPTURE(n, seed);
+      std::mt19937 rng(seed * 31 + static_cast<unsigned>(n));
+      // Cluster centres on bucket faces (multiples of 16 tol) and inside buckets; points
+      // scattered within 0.2 .. 1.5 tol of them: chains, pairs across faces and corners, and
+      // exact duplicates.
+      std::uniform_int_distribution<int> cell(-3, 3);
+      std::uniform_real_distribution<double> unit(-1, 1), frac(0, 1);
+      ndc::Complex<S> c;
+      c.n = n;
+      c.k = 2;
+      for (int cluster = 0; cluster < 60; ++cluster) {
+        std::vector<double> centre(n);
+        for (int j = 0; j < n; ++j)
+          centre[j] = 16 * tol * (cell(rng) + (cluster % 3 == 0 ? 0.0 : frac(rng)));
+        const int points = 1 + cluster % 5;
+        for (int p = 0; p < points; ++p) {
+          std::vector<S> x(n);
+          const double spread = p == 0 ? 0.0 : (p % 2 ? 0.6 : 1.5) * tol / std::sqrt(double(n));
+          for (int j = 0; j < n; ++j) x[j] = S(centre[j] + spread * unit(rng));
+          c.addVertex(x, cluster);
+          if (p == 3) c.addVertex(x, cluster);  // an exact duplicate
+        }
+      }
+      std::uniform_int_distribution<std::int32_t> vertex(
+          0, static_cast<std::int32_t>(c.vertexCount()) - 1);
+      for (int s = 0; s < 200; ++s) {
+        const std::int32_t t[3] = {vertex(rng), vertex(rng), vertex(rng)};
+        c.addSimplex(t);
+      }
+      const ndc::Complex<S> welded = ndc::weld(c, tol), expected = referenceWeld(c, tol);
+      CHECK(welded.vertexCount() < c.vertexCount());
+      CHECK(welded.vertices == expected.vertices);
+      CHECK(welded.vertexCell == expected.vertexCell);
+      CHECK(welded.simplices == expected.simplices);
+    }
   }
 }
 

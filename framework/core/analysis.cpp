@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -114,6 +115,121 @@ void markDuplicates(const std::vector<std::int32_t>& keys, std::size_t width,
   }
 }
 
+/// The buckets of weld's hashed grid: a vertex's own bucket and the neighbours across the
+/// bucket faces it lies within 2 tolerance of, as hashes of their integer coordinates.
+template <class S>
+class WeldBuckets {
+ public:
+  WeldBuckets(const Complex<S>& complex, double tolerance)
+      : complex_(complex),
+        fuzzy_(tolerance > 0),
+        bucket_(fuzzy_ ? 16 * tolerance : 1.0),
+        margin_(2 * tolerance) {}
+
+  /// Per-caller scratch of probes().
+  struct Scratch {
+    std::vector<std::int64_t> home, probe;
+    std::vector<std::array<int, 2>> reach;  // per axis: lowest and highest bucket offset
+    std::vector<int> offset;
+  };
+
+  /// The hash of vertex v's own bucket.
+  std::uint64_t home(std::size_t v, Scratch& w) const {
+    locate(v, w);
+    return hashOf(w.home);
+  }
+
+  /// Calls `f(hash)` for every bucket vertex v looks in (its own among them).
+  template <class F>
+  void probes(std::size_t v, Scratch& w, const F& f) const {
+    locate(v, w);
+    const int n = complex_.n;
+    for (int j = 0; j < n; ++j) w.offset[j] = w.reach[j][0];
+    while (true) {
+      for (int j = 0; j < n; ++j) w.probe[j] = w.home[j] + w.offset[j];
+      f(hashOf(w.probe));
+      int j = 0;
+      while (j < n && w.offset[j] == w.reach[j][1]) w.offset[j] = w.reach[j][0], ++j;
+      if (j == n) return;
+      ++w.offset[j];
+    }
+  }
+
+ private:
+  /// Vertex v's bucket coordinates and reach into w.
+  void locate(std::size_t v, Scratch& w) const {
+    const int n = complex_.n;
+    w.home.resize(n), w.probe.resize(n), w.reach.resize(n), w.offset.resize(n);
+    const auto x = complex_.vertex(v);
+    for (int j = 0; j < n; ++j) {
+      const double xd = toDouble(x[j]);
+      double q = std::floor(xd / bucket_);
+      if (!std::isfinite(q)) q = 0;  // NaN / inf coordinates share bucket 0; distance decides
+      q = std::clamp(q, -4.0e18, 4.0e18);
+      w.home[j] = static_cast<std::int64_t>(q);
+      w.reach[j] = {0, 0};
+      if (fuzzy_ && std::isfinite(xd)) {
+        // Why: a partner within tolerance may sit across the nearest bucket face.
+        if (xd - q * bucket_ <= margin_) w.reach[j][0] = -1;
+        if ((q + 1) * bucket_ - xd <= margin_) w.reach[j][1] = 1;
+      }
+    }
+  }
+
+  static std::uint64_t hashOf(std::span<const std::int64_t> b) {
+    std::uint64_t h = 0x12345678;
+    for (std::int64_t c : b) h = mix(h, static_cast<std::uint64_t>(c));
+    return h;
+  }
+
+  const Complex<S>& complex_;
+  bool fuzzy_;
+  double bucket_, margin_;
+};
+
+/// Which vertices can merge at all: those that look in a bucket (by hash) where another vertex
+/// lives, and those others. The rest are alone within their reach and stay as they are.
+/// In parallel: each vertex marks itself and the vertices it finds.
+template <class S>
+std::vector<std::uint8_t> mergeCandidates(const Complex<S>& complex,
+                                          const WeldBuckets<S>& buckets) {
+  using Scratch = typename WeldBuckets<S>::Scratch;
+  const std::size_t count = complex.vertexCount();
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> homes(count);
+  parallelForBlocks(count, [&](std::size_t begin, std::size_t end) {
+    Scratch w;
+    for (std::size_t v = begin; v < end; ++v)
+      homes[v] = {buckets.home(v, w), static_cast<std::uint32_t>(v)};
+  });
+  parallelSort(homes.begin(), homes.end(), std::less<>());
+  // Where each vertex's own bucket is in `homes`: its run of equal hashes is next to it.
+  std::vector<std::uint32_t> rank(count);
+  parallelFor(
+      count, [&](std::size_t i) { rank[homes[i].second] = static_cast<std::uint32_t>(i); }, 4096);
+  std::vector<std::uint8_t> candidate(count, 0);
+  parallelForBlocks(count, [&](std::size_t begin, std::size_t end) {
+    Scratch w;
+    for (std::size_t v = begin; v < end; ++v) {
+      const std::size_t at = rank[v];
+      const std::uint64_t own = homes[at].first;
+      // Its own bucket: the vertices there mark themselves too.
+      if ((at > 0 && homes[at - 1].first == own) || (at + 1 < count && homes[at + 1].first == own))
+        std::atomic_ref<std::uint8_t>(candidate[v]).store(1, std::memory_order_relaxed);
+      // The neighbour buckets (a vertex near a bucket face): a search, and the vertices found
+      // are marked, since they need not look back.
+      buckets.probes(v, w, [&](std::uint64_t hash) {
+        if (hash == own) return;
+        auto it = std::lower_bound(homes.begin(), homes.end(), std::pair{hash, std::uint32_t{0}});
+        for (; it != homes.end() && it->first == hash; ++it) {
+          std::atomic_ref<std::uint8_t>(candidate[v]).store(1, std::memory_order_relaxed);
+          std::atomic_ref<std::uint8_t>(candidate[it->second]).store(1, std::memory_order_relaxed);
+        }
+      });
+    }
+  });
+  return candidate;
+}
+
 }  // namespace
 
 template <class S>
@@ -123,66 +239,62 @@ Complex<S> weld(const Complex<S>& complex, double tolerance) {
   Complex<S> out;
   out.n = n;
   out.k = k;
-  const bool fuzzy = tolerance > 0;
-  const double bucket = fuzzy ? 16 * tolerance : 1.0;
-  const double margin = 2 * tolerance;
-  const S tol2 = fuzzy ? S(tolerance) * S(tolerance) : S(0);
+  const S tol2 = tolerance > 0 ? S(tolerance) * S(tolerance) : S(0);
+  const std::size_t vertices = complex.vertexCount();
 
-  // Step 1: greedy merge through the hashed bucket grid.
-  // bucket hash -> its latest vertex; next[r]: the vertex added to the bucket before r.
-  FlatMap<std::uint64_t, std::int32_t> buckets;
-  std::vector<std::int32_t> next;
-  buckets.reserve(complex.vertexCount());
-  std::vector<std::int32_t> remap(complex.vertexCount());
-  std::vector<std::int64_t> home(n), probe(n);
-  std::vector<std::array<int, 2>> reach(n);  // per axis: lowest and highest bucket offset
-  std::vector<int> offset(n);
-  const auto hashOf = [&](std::span<const std::int64_t> b) {
-    std::uint64_t h = 0x12345678;
-    for (std::int64_t c : b) h = mix(h, static_cast<std::uint64_t>(c));
-    return h;
-  };
-  for (std::size_t v = 0; v < complex.vertexCount(); ++v) {
-    const auto x = complex.vertex(v);
-    for (int j = 0; j < n; ++j) {
-      const double xd = toDouble(x[j]);
-      double q = std::floor(xd / bucket);
-      if (!std::isfinite(q)) q = 0;  // NaN / inf coordinates share bucket 0; distance decides
-      q = std::clamp(q, -4.0e18, 4.0e18);
-      home[j] = static_cast<std::int64_t>(q);
-      reach[j] = {0, 0};
-      if (fuzzy && std::isfinite(xd)) {
-        // Why: a partner within tolerance may sit across the nearest bucket face.
-        if (xd - q * bucket <= margin) reach[j][0] = -1;
-        if ((q + 1) * bucket - xd <= margin) reach[j][1] = 1;
-      }
-    }
-    // Look in every bucket of the product of the per-axis offsets.
-    std::int32_t found = -1;
-    for (int j = 0; j < n; ++j) offset[j] = reach[j][0];
-    while (found < 0) {
-      for (int j = 0; j < n; ++j) probe[j] = home[j] + offset[j];
-      if (const std::int32_t* latest = buckets.find(hashOf(probe))) {
-        for (std::int32_t r = *latest; r >= 0; r = next[r]) {
-          const auto y = out.vertex(r);
+  // Step 1: greedy merge through the hashed bucket grid, among the vertices that can merge at
+  // all (the others stay, and are found by no one): in vertex order, each merges into the
+  // first earlier vertex that stayed and lies within tolerance (first: the one that stayed
+  // earliest, so the one with the lowest output number).
+  const WeldBuckets<S> buckets(complex, tolerance);
+  const std::vector<std::uint8_t> candidate = mergeCandidates(complex, buckets);
+  std::vector<std::int32_t> into(vertices);  // the vertex each merges into (itself: it stays)
+  std::iota(into.begin(), into.end(), std::int32_t{0});
+  {
+    // bucket hash -> its latest staying vertex; next[v]: the one added to the bucket before v.
+    FlatMap<std::uint64_t, std::int32_t> latest;
+    std::vector<std::int32_t> next(vertices, -1);
+    typename WeldBuckets<S>::Scratch w;
+    for (std::size_t v = 0; v < vertices; ++v) {
+      if (!candidate[v]) continue;
+      const auto x = complex.vertex(v);
+      std::int32_t found = -1;
+      buckets.probes(v, w, [&](std::uint64_t hash) {
+        const std::int32_t* last = latest.find(hash);
+        for (std::int32_t r = last ? *last : -1; r >= 0; r = next[r]) {
+          const auto y = complex.vertex(static_cast<std::size_t>(r));
           S d2 = 0;
           for (int j = 0; j < n; ++j) d2 += (x[j] - y[j]) * (x[j] - y[j]);
           if (d2 <= tol2 && (found < 0 || r < found)) found = r;
         }
+      });
+      if (found >= 0) {
+        into[v] = found;
+        continue;
       }
-      int j = 0;
-      while (j < n && offset[j] == reach[j][1]) offset[j] = reach[j][0], ++j;
-      if (j == n) break;
-      ++offset[j];
+      const auto [slot, added] = latest.insert(buckets.home(v, w), static_cast<std::int32_t>(v));
+      if (!added) next[v] = *slot;
+      *slot = static_cast<std::int32_t>(v);
     }
-    if (found < 0) {
-      found = out.addVertex(x, complex.vertexCell.empty() ? -1 : complex.vertexCell[v]);
-      const auto [latest, added] = buckets.insert(hashOf(home), found);
-      next.push_back(added ? -1 : *latest);
-      *latest = found;
-    }
-    remap[v] = found;
   }
+  // The staying vertices numbered in order, copied in parallel.
+  std::vector<std::int32_t> remap(vertices);
+  std::int32_t stayed = 0;
+  for (std::size_t v = 0; v < vertices; ++v) {
+    if (into[v] == static_cast<std::int32_t>(v)) remap[v] = stayed++;
+  }
+  for (std::size_t v = 0; v < vertices; ++v) remap[v] = remap[into[v]];
+  out.vertices.resize(std::size_t(stayed) * n);
+  out.vertexCell.resize(std::size_t(stayed), -1);
+  parallelFor(
+      vertices,
+      [&](std::size_t v) {
+        if (into[v] != static_cast<std::int32_t>(v)) return;
+        const auto x = complex.vertex(v);
+        std::copy(x.begin(), x.end(), out.vertices.begin() + std::ptrdiff_t(remap[v]) * n);
+        if (!complex.vertexCell.empty()) out.vertexCell[remap[v]] = complex.vertexCell[v];
+      },
+      4096);
 
   // Step 2: remap the simplices, drop degenerate ones and duplicates (same vertex set): the
   // first of each vertex set stays, in the input's order.
@@ -201,12 +313,18 @@ Complex<S> weld(const Complex<S>& complex, double tolerance) {
       },
       4096);
   markDuplicates(sorted, width, keep);
-  std::vector<std::int32_t> simplex(width);
-  for (std::size_t s = 0; s < count; ++s) {
-    if (!keep[s]) continue;
-    for (std::size_t i = 0; i < width; ++i) simplex[i] = remap[complex.simplices[s * width + i]];
-    out.addSimplex(simplex);
-  }
+  // The kept simplices in order, remapped in parallel.
+  std::vector<std::size_t> at(count + 1, 0);
+  for (std::size_t s = 0; s < count; ++s) at[s + 1] = at[s] + keep[s];
+  out.simplices.resize(at.back() * width);
+  parallelFor(
+      count,
+      [&](std::size_t s) {
+        if (!keep[s]) return;
+        for (std::size_t i = 0; i < width; ++i)
+          out.simplices[at[s] * width + i] = remap[complex.simplices[s * width + i]];
+      },
+      4096);
   return out;
 }
 
