@@ -64,45 +64,49 @@ MagnitudeBound<S>::MagnitudeBound(std::shared_ptr<const Tape> tape) : tape_(std:
     }
   }
   if (!stack.empty()) count_ = stack.back().first + stack.back().second;
+  depth_ = static_cast<std::size_t>(std::max(tape_->stackDepth(), 1));
 }
 
 template <class S>
 S MagnitudeBound<S>::operator()(std::span<const S> absX, std::vector<S>& stack) const {
   using K = TapeOp::Kind;
   const auto ops = tape_->ops();
-  stack.clear();
+  // A stack of the program's depth, sized once (Newton calls this every iteration).
+  if (stack.size() < depth_) stack.resize(depth_);
+  S* top = stack.data() - 1;
   for (std::size_t i = 0; i < ops.size(); ++i) {
     const TapeOp& op = ops[i];
     switch (op.kind) {
       case K::kConstant:
       case K::kLeaf:
-        stack.push_back(operand_[i]);
+        *++top = operand_[i];
         break;
       case K::kVariable:
-        stack.push_back(absX[static_cast<std::size_t>(op.arg)]);
+        *++top = absX[static_cast<std::size_t>(op.arg)];
         break;
       case K::kNeg:
         break;
       case K::kPow: {
-        S base = stack.back(), result = 1;
+        S base = *top, result = 1;
         for (int e = 0; e < op.arg; ++e) result *= base;
-        stack.back() = result;
+        *top = result;
         break;
       }
-      default: {
-        // Binary: |a +- b| <= |a| + |b|, |ab| = |a||b|, |a / c| with c the divisor.
-        S b = std::move(stack.back());
-        stack.pop_back();
-        if (op.kind == K::kMul)
-          stack.back() *= b;
-        else if (op.kind == K::kDiv)
-          stack.back() /= operand_[i];
-        else
-          stack.back() += b;
-      }
+      case K::kMul:
+        // Binary: |ab| = |a||b|, |a +- b| <= |a| + |b|, |a / c| with c the divisor.
+        top[-1] *= *top;
+        --top;
+        break;
+      case K::kDiv:
+        top[-1] /= operand_[i];
+        --top;
+        break;
+      default:
+        top[-1] += *top;
+        --top;
     }
   }
-  return stack.back();
+  return *top;
 }
 
 template class MagnitudeBound<double>;

@@ -31,6 +31,7 @@ class MagnitudeBound {
   std::shared_ptr<const Tape> tape_;
   std::vector<S> operand_;  ///< per instruction: |constant|, leaf bound or |divisor|
   int count_ = 0;
+  std::size_t depth_ = 0;  ///< the largest stack the program needs
 };
 
 extern template class MagnitudeBound<double>;
