@@ -177,7 +177,7 @@ def main(argv):
              f"Measured {started:%Y-%m-%d %H:%M} UTC by `{cmdline}` (run by `bench/run.sh`) on "
              f"{os.cpu_count()} cores, commit {commit}; load average {' '.join(load_start)} at "
              f"the start and {' '.join(load_end)} at the end; {repeats} interleaved run(s) per "
-             "timed command.", "",
+             "timed command (the thread rows: their pairs).", "",
              f"**Cost per solution cell against n** (`ndcontour {command}`; stage times per "
              "solution cell; *before*: the figures issue 14 was filed with, before the "
              "certificate and adaptive refinement of issue 12, which the connection column now "
