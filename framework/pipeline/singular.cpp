@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <span>
 #include <unordered_map>
 #include <utility>
@@ -34,6 +35,37 @@ std::pair<S, S> sigmaRange(const Matrix<S>& a) {
   }
   const Vector<S> v = Eigen::JacobiSVD<Matrix<S>>(a).singularValues();
   return {v(v.size() - 1), v(0)};
+}
+
+/// Whether sigma_min(a) > threshold(sigma_max(a)), where two Cholesky factorizations (a few
+/// times cheaper than the singular values) decide it clearly; `threshold` nondecreasing. With
+/// G = a a^T and T = trace G, sigma_max^2 lies in [T / m, T], and G and a factorization round
+/// by under 1e-13 T for these sizes. A factorization of G - t I with
+/// t = 2 max(threshold(sqrt T)^2, 1e-8 T) shows lambda_min(G) > t - rounding, so
+/// sigma_min > threshold(sigma_max): true. A failed factorization of G - t I with
+/// t = threshold(sqrt(T / m))^2 / 2 >= 1e-8 T shows lambda_min(G) < t + rounding < 2 t, so
+/// sigma_min < threshold(sigma_max): false. Otherwise (close to the threshold, or not finite)
+/// nullopt: the singular values decide.
+template <class S, class Threshold>
+std::optional<bool> clearlyBeyond(const Matrix<S>& a, const Threshold& threshold) {
+  using std::sqrt;
+  if (a.rows() < 2) return std::nullopt;  // sigmaRange is a norm there
+  for (Eigen::Index i = 0; i < a.size(); ++i)
+    if (!isFinite<S>(a.data()[i])) return std::nullopt;
+  const Matrix<S> gram = a * a.transpose();
+  const S trace = gram.trace();
+  const S high = threshold(S(sqrt(trace)));
+  const S low = threshold(S(sqrt(trace / S(a.rows()))));
+  if (!isFinite(trace) || !isFinite(high) || !(trace > 0)) return std::nullopt;
+  const auto factors = [&](const S& t) {
+    Matrix<S> shifted = gram;
+    shifted.diagonal().array() -= t;
+    return Eigen::LLT<Matrix<S>>(shifted).info() == Eigen::Success;
+  };
+  if (factors(2 * std::max<S>(high * high, S(1e-8) * trace))) return true;
+  const S t = low * low / 2;
+  if (t >= S(1e-8) * trace && !factors(t)) return false;
+  return std::nullopt;
 }
 
 /// The data of one block of the grid at the block level (step 1). An equation in its quadratic
@@ -252,11 +284,17 @@ typename Search<S>::Exclusion Search<S>::excluded(std::span<const std::int32_t> 
   const S relative = S(1e-8), absolute = S(1e3) * eps_;
 
   // Test 1 (Weyl): ||D (J(x) - J(c))||_2 <= |x - c| ||D L|| on the cell.
-  const auto [sigmaMin, sigmaMax] = sigmaRange<S>(a);
   S lip2 = 0;
   for (int i = 0; i < m_; ++i) lip2 += d[i] * d[i] * block.lipschitz[i] * block.lipschitz[i];
-  if (isFinite(sigmaMin) && sigmaMin > sqrt(lip2) * radius * (1 + relative) + absolute * sigmaMax)
-    return Exclusion::kLipschitz;
+  const auto lipschitzBound = [&](const S& sigmaMax) {
+    return S(sqrt(lip2) * radius * (1 + relative) + absolute * sigmaMax);
+  };
+  const std::optional<bool> lipschitz = clearlyBeyond<S>(a, lipschitzBound);
+  if (lipschitz.value_or(false)) return Exclusion::kLipschitz;
+  if (!lipschitz) {
+    const auto [sigmaMin, sigmaMax] = sigmaRange<S>(a);
+    if (isFinite(sigmaMin) && sigmaMin > lipschitzBound(sigmaMax)) return Exclusion::kLipschitz;
+  }
 
   // Test 2 (Weyl): J(x) in [A - R, A + R] entrywise, from the Bernstein form on the cell, or
   // for a quadratic from its affine gradient: G_j(c) +- (|H| h)_j.
@@ -280,9 +318,12 @@ typename Search<S>::Exclusion Search<S>::excluded(std::span<const std::int32_t> 
       slope2 += d[i] * d[i] * slope * slope;
     }
   }
+  const S enclosureBound = rad.norm() * (1 + relative) + absolute * sqrt(slope2);
+  const std::optional<bool> enclosure =
+      clearlyBeyond<S>(mid, [&](const S&) { return enclosureBound; });
+  if (enclosure) return *enclosure ? Exclusion::kEnclosure : Exclusion::kNone;
   const S midMin = sigmaRange<S>(mid).first;
-  if (isFinite(midMin) && midMin > rad.norm() * (1 + relative) + absolute * sqrt(slope2))
-    return Exclusion::kEnclosure;
+  if (isFinite(midMin) && midMin > enclosureBound) return Exclusion::kEnclosure;
   return Exclusion::kNone;
 }
 

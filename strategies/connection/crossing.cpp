@@ -37,9 +37,10 @@ using namespace crossing_detail;
 template <class S>
 struct JacobianWork {
   std::vector<S> f, j;
-  Matrix<S> full, square;
+  Matrix<S> full, square, gram;
   Eigen::FullPivLU<Matrix<S>> lu;
   Eigen::JacobiSVD<Matrix<S>> svd;
+  Eigen::LLT<Matrix<S>> llt;
 
   /// The m x n Jacobian of the system at x, into `full`.
   const Matrix<S>& jacobianAt(const System<S>& system, std::span<const S> x) {
@@ -55,6 +56,16 @@ struct JacobianWork {
 
   /// Singular values of `full`, largest first.
   const Vector<S>& singularValues() { return svd.compute(full).singularValues(); }
+
+  /// Whether sigma_min(full) > ratio sigma_max(full) clearly: a Cholesky factorization of
+  /// J J^T - t I with t = 2 ratio^2 trace(J J^T) >= 2 ratio^2 sigma_max^2 exists, so
+  /// sigma_min^2 > t. A tenth of the singular values' cost; false says nothing.
+  bool clearlyRegular(const S& ratio) {
+    gram.noalias() = full * full.transpose();
+    const S t = 2 * ratio * ratio * gram.trace();
+    gram.diagonal().array() -= t;
+    return t > 0 && llt.compute(gram).info() == Eigen::Success;
+  }
 };
 
 /// The local degree of F on a face from its roots: the sum of the signs of the face Jacobian's
@@ -79,10 +90,11 @@ int faceDegree(const System<S>& system, const std::vector<std::vector<S>>& roots
     for (int col = 0; col < m; ++col) j.col(col) = full.col(freeAxes[col]);
     const S det = w.lu.compute(j).determinant();
     degree += det > 0 ? 1 : (det < 0 ? -1 : 0);
-    // One equation: one singular value, never below a tenth of itself.
-    if (m == 1) continue;
+    // One equation: one singular value, never below a tenth of itself. Most roots are
+    // clearly regular (a Cholesky test); the singular values decide the others.
+    if (m == 1 || singular || w.clearlyRegular(S(0.1))) continue;
     const Vector<S>& sigma = w.singularValues();
-    singular = singular || sigma(m - 1) < sigma(0) / 10;
+    singular = sigma(m - 1) < sigma(0) / 10;
   }
   const int count = static_cast<int>(roots.size());
   if (count % 2 == 1 && degree == 0) degree = 1;  // a root of unknown orientation
@@ -2322,8 +2334,14 @@ class AdaptiveCrossing {
     std::optional<JacobianWork<S>> fresh;
     JacobianWork<S>& w = threadScratch<S, JacobianWork<S>>(fresh);
     w.jacobianAt(in_.system, std::span<const S>(x));
+    // Most vertices are far from singular: a Cholesky test settles those.
+    const S ratio = width * 1e-3;
+    if (w.clearlyRegular(ratio)) {
+      d.singular = false;
+      return;
+    }
     const Vector<S>& sigma = w.singularValues();
-    d.singular = sigma(0) == 0 || sigma(m_ - 1) <= sigma(0) * width * 1e-3;
+    d.singular = sigma(0) == 0 || sigma(m_ - 1) <= sigma(0) * ratio;
   }
 
   /// The pieces of M in leaf c: for k = 2 the components of the link of its vertex (one edge
