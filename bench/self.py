@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """ndcontour's own tables (docs/performance.md, "ndcontour's own tables"), written by
-bench/run.sh before the peer benchmark:
+bench/run.sh after the peer benchmark:
 
 1. Cost per solution cell against n: `ndcontour experiment bench/per-cell.toml --jobs 1`
    (rotated circles in R^3..R^8, rotated 2-spheres in R^3..R^7, depth 5), the time of each
