@@ -506,6 +506,71 @@ TEMPLATE_TEST_CASE("crossing: a leaf model's facets decide linear systems", "[cr
   CHECK(emptyLeaves > 20);
 }
 
+TEMPLATE_TEST_CASE("crossing: a leaf model's band test decides linear systems", "[crossing]",
+                   NDC_SCALARS) {
+  // Generated 2-flats M: A (x - p) = 0 in R^3..R^8 as in the facets test, and leaves of width
+  // w near p. bandExcluded(model of F - c) claims that no level set A (x - p) = t c, t in
+  // [0, 1], meets the leaf. With c tiny it must decide whether M meets the leaf (M meets it
+  // exactly when its line on some facet passes into that facet) wherever the deepest line
+  // reaches more than 1% of w in or stays more than 1% outside; with c = s A (x* - p) for a
+  // point x* of the leaf and s >= 1 the level set at t = 1 / s passes through x*, so it must
+  // never exclude, whether M or M_c meets the leaf or not.
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  std::mt19937 rng(37);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int excluded = 0, kept = 0, swept = 0;
+  for (int n = 3; n <= 8; ++n) {
+    for (int system = 0; system < 6; ++system) {
+      FlatSystem<S> flat(n, rng);
+      const std::vector<double>& p = flat.p;
+      const Eigen::MatrixXd& a = flat.a;
+      if (Eigen::FullPivLU<Eigen::MatrixXd>(a).rank() < n - 2) continue;
+      const auto m = static_cast<std::size_t>(a.rows());
+      ndc::LeafModel<S> model;
+      ndc::LinearisedSystem<S> linearised;
+      for (int trial = 0; trial < 30; ++trial) {
+        const double width = std::pow(2.0, -static_cast<int>(rng() % 12));
+        ndc::Box<S> box{std::vector<S>(n), std::vector<S>(n)};
+        std::vector<double> lo(n);
+        for (int j = 0; j < n; ++j) {
+          lo[j] = p[j] - width * (std::round(64 * (1.6 * unit(rng) - 0.3)) / 64);
+          box.lo[j] = S(lo[j]);
+          box.hi[j] = S(lo[j] + width);
+        }
+        INFO("n = " << n << ", system " << system << ", trial " << trial);
+        // A tiny level: the band is M up to 1e-12 w.
+        std::vector<S> level(m, S(1e-12 * width));
+        ndc::buildLeafModel(flat.evaluators, box, std::span<const S>(level), model);
+        const bool out = ndc::bandExcluded(model, std::span<const S>(level), linearised, 8);
+        double deepest = -1e300;
+        for (int j = 0; j < n; ++j) {
+          for (int side = 0; side < 2; ++side)
+            deepest = std::max(deepest, lineDepth(a, p, lo, width, j, side));
+        }
+        if (std::abs(deepest) > 0.01) {
+          INFO("M reaches " << deepest << " widths into the leaf");
+          CHECK(out == (deepest < 0));
+          (out ? excluded : kept) += 1;
+        }
+        // A level whose band passes through a point x* of the leaf at t = 1 / s.
+        std::vector<double> inside(n);
+        for (int j = 0; j < n; ++j) inside[j] = lo[j] + width * (0.05 + 0.9 * unit(rng)) - p[j];
+        const Eigen::VectorXd c =
+            (1 + 4 * unit(rng)) * (a * Eigen::Map<const Eigen::VectorXd>(inside.data(), n));
+        for (std::size_t i = 0; i < m; ++i) level[i] = S(c(Eigen::Index(i)));
+        ndc::buildLeafModel(flat.evaluators, box, std::span<const S>(level), model);
+        CHECK_FALSE(ndc::bandExcluded(model, std::span<const S>(level), linearised, 8));
+        ++swept;
+      }
+    }
+  }
+  INFO(excluded << " leaves excluded, " << kept << " kept, " << swept << " swept");
+  CHECK(excluded > 200);
+  CHECK(kept > 50);
+  CHECK(swept > 1000);
+}
+
 TEMPLATE_TEST_CASE("crossing: closed curves in R^2..R^6", "[crossing]", NDC_SCALARS) {
   checkCases<TestType>({
       {"circle (R^2)", example("circle"), 5, 1, 0},

@@ -1065,7 +1065,13 @@ class AdaptiveCrossing {
       // forms either: its patches are restricted only if a face needs them.
       if (m_ > 1 && byEvaluation_) {
         buildModel();
-        if (levelsMet(model, leafBox(c))) out.empty = 0, out.band = 0;
+        if (levelsMet(model, leafBox(c))) {
+          out.empty = 0, out.band = 0;
+        } else if (modelExcludesBand(model)) {
+          // Neither M_c nor any level set between it and M meets the leaf (most children of a
+          // refined leaf): no need for the forms' coefficients.
+          out.empty = 1, out.band = 1;
+        }
       }
       if (out.empty < 0) prepare();
     }
@@ -1117,6 +1123,16 @@ class AdaptiveCrossing {
       if (!quiet(r)) out.visit.emplace_back(f, static_cast<std::int32_t>(out.faces.size()));
       out.faces.emplace_back(kind, std::move(r));
     }
+  }
+
+  /// Whether the leaf's affine model proves that no level set F = t c, t in [0, 1], meets it
+  /// (bandExcluded: the linearised system's tests on the model; docs/crossing.md, "Empty leaves
+  /// by the model"). Then restrictLeaf would find the leaf empty with its band too, or fail to
+  /// prove what this proves: the Bernstein forms are not needed.
+  bool modelExcludesBand(const LeafModel<S>& model) const {
+    std::optional<LinearisedSystem<S>> fresh;
+    return bandExcluded(model, std::span<const S>(level_),
+                        threadScratch<S, LinearisedSystem<S>>(fresh), kFaceMultiplierSteps);
   }
 
   /// levelsMet's working storage (threadScratch).

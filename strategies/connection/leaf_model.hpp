@@ -334,19 +334,14 @@ bool faceMultipliersExclude(const LeafModel<S>& model, const Box<S>& box, std::s
                          w.rho.data(), w.h.data(), gamma, iterations);
 }
 
-/// For a surface (k = 2): which facets of the model's leaf (fixed axis j at its lower end,
-/// entry 2 j, or upper end, 2 j + 1) may hold a zero of F - level, into `met` (2 n entries, 1:
-/// may), by the planar test of the model's linearisation over the whole leaf
-/// (LinearisedSystem::facetsMet: J_c the slopes' midpoints, G the value widened by the slopes'
-/// radii times the half-widths). A face of dimension n - 2 lies in two facets, so one facet ruled
-/// out rules out its 2 (n - 1) faces, and a leaf M_c crosses near its middle meets few facets:
-/// one O(n^2 m) test per leaf instead of a test per face (docs/crossing.md, "Facets first").
-/// Returns true when no point of the leaf is a zero; every entry is 1 where nothing is proven.
+/// Fills `system` (resized if needed) with the model's linearisation over its whole leaf:
+/// J_c the slopes' midpoints, G the value widened by the slopes' radii times the half-widths,
+/// the value's centre moved by `shift` and its radius widened by `widen` (per equation; empty:
+/// none). Returns false when an entry is not finite.
 template <class S>
-bool facetsOfModel(const LeafModel<S>& model, LinearisedSystem<S>& system, std::vector<char>& met) {
+bool fillModelSystem(const LeafModel<S>& model, LinearisedSystem<S>& system,
+                     std::span<const S> shift, std::span<const S> widen) {
   const std::size_t m = model.valueMid.size(), n = model.centre.size();
-  met.assign(2 * n, 1);
-  if (!model.valid || n != m + 2) return false;
   if (system.n() != static_cast<int>(n) || system.m() != static_cast<int>(m))
     system.resize(static_cast<int>(n), static_cast<int>(m));
   const S up = S(1) + system.tolerance();
@@ -359,10 +354,59 @@ bool facetsOfModel(const LeafModel<S>& model, LinearisedSystem<S>& system, std::
       spread += model.gradRad[i * n + j] * model.radius[j];
     }
     system.mu[i] = model.valueMid[i];
+    if (!shift.empty()) {
+      // The shifted centre rounds once: its error joins the radius.
+      system.mu[i] += shift[i];
+      using std::abs;
+      spread = (spread + widen[i] + 2 * ScalarTraits<S>::epsilon() * abs(system.mu[i])) * up;
+    }
     system.rho[i] = spread * up + S(std::numeric_limits<double>::min());
     if (!isFinite(system.rho[i])) return false;
   }
+  return true;
+}
+
+/// For a surface (k = 2): which facets of the model's leaf (fixed axis j at its lower end,
+/// entry 2 j, or upper end, 2 j + 1) may hold a zero of F - level, into `met` (2 n entries, 1:
+/// may), by the planar test of the model's linearisation over the whole leaf
+/// (LinearisedSystem::facetsMet, fillModelSystem). A face of dimension n - 2 lies in two
+/// facets, so one facet ruled out rules out its 2 (n - 1) faces, and a leaf M_c crosses near its
+/// middle meets few facets: one O(n^2 m) test per leaf instead of a test per face
+/// (docs/crossing.md, "Facets first"). Returns true when no point of the leaf is a zero; every
+/// entry is 1 where nothing is proven.
+template <class S>
+bool facetsOfModel(const LeafModel<S>& model, LinearisedSystem<S>& system, std::vector<char>& met) {
+  const std::size_t m = model.valueMid.size(), n = model.centre.size();
+  met.assign(2 * n, 1);
+  if (!model.valid || n != m + 2) return false;
+  if (!fillModelSystem(model, system, std::span<const S>(), std::span<const S>())) return false;
   return system.facetsMet(met);
+}
+
+/// True when the model proves that no level set F = t level, t in [0, 1], meets its leaf (the
+/// band from M to M_c, the model being of F - level): the value's centre moved by level / 2
+/// and its radius widened by |level| / 2, then the linearised system's tests
+/// (LinearisedSystem::excludes, `multiplierSteps` least-squares steps). Where it holds, the
+/// leaf is empty in the sense of the Bernstein coefficients' test (docs/crossing.md, "Empty
+/// leaves by the model"), which then need not be restricted to the leaf.
+template <class S>
+bool bandExcluded(const LeafModel<S>& model, std::span<const S> level, LinearisedSystem<S>& system,
+                  int multiplierSteps) {
+  using std::abs;
+  if (!model.valid) return false;
+  const std::size_t m = model.valueMid.size();
+  thread_local std::vector<S> shift, widen;
+  shift.resize(m), widen.resize(m);
+  for (std::size_t i = 0; i < m; ++i) {
+    shift[i] = level[i] / 2;  // exact: a halving
+    widen[i] = abs(shift[i]);
+  }
+  if (!fillModelSystem(model, system, std::span<const S>(shift), std::span<const S>(widen)))
+    return false;
+  const S up = S(1) + system.tolerance();
+  S hh = 0;
+  for (const S& h : system.h) hh += h * h;
+  return system.excludes(hh * up, multiplierSteps);
 }
 
 }  // namespace ndc
