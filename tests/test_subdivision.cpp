@@ -663,6 +663,84 @@ TEMPLATE_TEST_CASE("linearized subdivision keeps every cell of generated circles
       }
 }
 
+TEMPLATE_TEST_CASE("linearized bounding carries points of the manifold down to the boxes",
+                   "[subdivision]", NDC_SCALARS) {
+  // The whole binary subdivision of rotated circles and 2-spheres in R^4..R^7 (Mpfr: R^4 and
+  // R^5) to depth 3, by hand: every point a child takes along (State::point) must lie in the
+  // child by its error, be a zero of the system to rounding, and the boxes that hold one are
+  // kept without a test; points must reach most of the final boxes that samples of M hit.
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  using State = typename ndc::LinearizedBounding<S>::State;
+  const int top = std::is_same_v<S, double> ? 7 : 5;
+  std::mt19937 rng(43);
+  for (int n = 4; n <= top; ++n)
+    for (int k = 1; k <= 2; ++k) {
+      const Manifold m = generatedSphere(n, k, 700 + 10 * n + k, false);
+      const ndc::Box<S> domain = m.problem.domainAs<S>();
+      const ndc::LinearizedBounding<S> bounding(m.problem, domain);
+      const ndc::System<S> system(m.problem);
+      const int depth = 3 * n;
+      std::vector<std::pair<State, State>> children(std::size_t(depth) + 1);
+      std::vector<S> f(system.m());
+      int points = 0, bad = 0, finalWithPoint = 0;
+      std::set<std::vector<double>> finalPointBoxes;  // lower corners, of final boxes
+      const std::function<void(const State&, int)> descend = [&](const State& state, int d) {
+        if (d == depth) {
+          if (state.hasPoint) {
+            ++finalWithPoint;
+            std::vector<double> corner;
+            for (const S& v : state.box.lo) corner.push_back(ndc::toDouble(v));
+            finalPointBoxes.insert(corner);
+          }
+          return;
+        }
+        auto& [lower, upper] = children[std::size_t(d) + 1];
+        bounding.halve(state, d % n, lower, upper);
+        for (State* child : {&lower, &upper}) {
+          if (child->hasPoint) {
+            ++points;
+            system.evaluate(std::span<const S>(child->point), std::span<S>(f));
+            for (int j = 0; j < n; ++j) {
+              bad += !(child->point[j] - child->pointError >= child->box.lo[j] &&
+                       child->point[j] + child->pointError <= child->box.hi[j]);
+            }
+            for (const S& v : f) bad += !(std::abs(ndc::toDouble(v)) < 1e-12);
+            bad += !(child->pointError < S(1e-8) * (child->box.hi[0] - child->box.lo[0]));
+            CHECK(bounding.mayContainZero(*child));
+          }
+          if (bounding.mayContainZero(*child)) descend(*child, d + 1);
+        }
+      };
+      State root;
+      bounding.root(root);
+      if (bounding.mayContainZero(root)) descend(root, 0);
+      // The final boxes that samples of M hit, away from their faces.
+      int hit = 0, hitWithPoint = 0;
+      for (int s = 0; s < 2000; ++s) {
+        const std::vector<double> p = m.sample(rng);
+        std::vector<double> corner(n);
+        bool interior = true;
+        for (int j = 0; j < n; ++j) {
+          const double lo = ndc::toDouble(domain.lo[j]);
+          const double w = (ndc::toDouble(domain.hi[j]) - lo) / 8;
+          const double t = (p[j] - lo) / w;
+          interior = interior && t - std::floor(t) > 0.01 && t - std::floor(t) < 0.99;
+          corner[j] = lo + std::floor(t) * w;
+        }
+        if (!interior) continue;
+        ++hit;
+        hitWithPoint += finalPointBoxes.count(corner) > 0;
+      }
+      INFO(m.name << ": " << points << " points carried, " << finalWithPoint
+                  << " final boxes with one; of " << hit << " samples, " << hitWithPoint
+                  << " in such a box");
+      CHECK(bad == 0);
+      CHECK(points > 10 * n);
+      CHECK(hitWithPoint > hit / 4);
+    }
+}
+
 TEMPLATE_TEST_CASE("linearized bounding is conservative and inside bernstein's cells",
                    "[subdivision]", NDC_SCALARS) {
   ndc::test::PrecisionScope<TestType> scope(128);

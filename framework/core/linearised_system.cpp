@@ -32,6 +32,7 @@ void LinearisedSystem<S>::resize(int n, int m) {
   tlo_.resize(k);
   thi_.resize(k);
   witness_.reserve(k);
+  inside_.resize(nn);
   // The polygons of 7c and solvesInside: 4 corners, at most one vertex more per clip, up to
   // 4 n clips (clip swaps the buffers, so each gets the largest size).
   polygon_.reserve(2 * (4 + 4 * nn));
@@ -42,6 +43,7 @@ void LinearisedSystem<S>::resize(int n, int m) {
 template <class S>
 bool LinearisedSystem<S>::excludes(const S& hh, int multiplierSteps) {
   kernelReady_ = false;
+  insideFound_ = false;
   if (!factorTranspose()) return false;  // 3: J_c (nearly) rank-deficient
   invertLowerFactor();                   // 4
   S migSq = 0;
@@ -128,7 +130,9 @@ bool LinearisedSystem<S>::solvesInside() {
       S d = -a_[j];
       for (int p = 0; p < k && t; ++p) d += nul(j, p) * t[p];
       if (!(abs(d) < h[j] * inside)) return false;
+      inside_[std::size_t(j)] = d;
     }
+    insideFound_ = true;
     return true;
   };
   if (insideAt(nullptr)) return true;

@@ -47,6 +47,11 @@ class LinearisedSystem {
   /// up, `multiplierSteps` caps the multiplier test's least-squares steps.
   bool excludes(const S& hh, int multiplierSteps);
 
+  /// After excludes() returned false: a step d inside the box (by a relative 1e-6 on every
+  /// axis) that solves J_c d = -mid G up to rounding, if step 8's shortcut found one
+  /// (solvesInside), else null. c + d is a point of the linearised zero set inside the box.
+  const S* insideStep() const { return insideFound_ ? inside_.data() : nullptr; }
+
   /// After excludes() returned false having run steps 7b and 7c (else 0; and 0 for n > 32):
   /// the halves of the box that step 7's bounds show to hold no solution, bit 2 j for d_j <= 0
   /// and bit 2 j + 1 for d_j >= 0 (the children of a halving along j; docs/subdivision.md,
@@ -122,6 +127,8 @@ class LinearisedSystem {
   std::vector<S> pinv_, a_, b_, tlo_, thi_;  // J^+ (n x m), centre/bound per axis, t box
   std::vector<S> polygon_, clipped_;         // 7c: vertices (t_0, t_1) interleaved
   std::vector<S> witness_, tight_;           // solvesInside's t (k) and polygon
+  std::vector<S> inside_;                    // solvesInside's d (n)
+  bool insideFound_ = false;                 // inside_ holds it
   MultiplierTest<S> multipliers_;            // 8
 };
 

@@ -155,7 +155,8 @@ template <class S>
 LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& domain)
     : bernstein_(patchedEquations(problem), domain),
       n_(problem.n()),
-      m_(static_cast<int>(problem.equations.size())) {
+      m_(static_cast<int>(problem.equations.size())),
+      system__(problem) {
   const auto n = static_cast<std::size_t>(n_), m = static_cast<std::size_t>(m_);
   // Enabled when the equations are coupled: for equations in disjoint variables a box holds a
   // common zero iff each F_i vanishes on its own factor of the box, which the per-equation
@@ -211,6 +212,9 @@ bool LinearizedBounding<S>::mayContainZero(const State& state) const {
   // A half that the parent's test showed empty; else the box's own halves, found below.
   if (state.emptyByParent) return false;
   state.emptyHalves = 0;
+  state.hasStart = false;
+  // A box that holds a point of M holds a zero: no test could discard it.
+  if (state.hasPoint) return true;
   // The per-equation hulls first: cheap, and they discard most boxes far from every F_i = 0.
   if (!bernstein_.mayContainZero(state)) return false;
   if (!anyEvaluated_) {
@@ -231,9 +235,84 @@ bool LinearizedBounding<S>::mayContainZero(const State& state) const {
 }
 
 template <class S>
+void LinearizedBounding<S>::carryPoint(const State& parent, State& lower, State& upper) const {
+  lower.hasPoint = upper.hasPoint = false;
+  lower.hasStart = upper.hasStart = false;
+  if (!enabled_) return;
+  const std::vector<S>* x = &parent.point;
+  S error = parent.pointError;
+  if (!parent.hasPoint) {
+    // Without a point of the linearised zero set in the box (its test ran the multiplier
+    // search instead), M rarely meets the box where Newton's iteration from the centre ends.
+    if (!parent.hasStart || !newtonPoint(parent, error)) return;
+    x = &newtonX_;
+  }
+  // The zero within `error` of x lies in the closed child when x does by `error` on every
+  // axis; a point on the halving plane goes to neither child.
+  const auto holds = [&](const Box<S>& box) {
+    for (int j = 0; j < n_; ++j) {
+      if (!((*x)[j] - error >= box.lo[j] && (*x)[j] + error <= box.hi[j])) return false;
+    }
+    return true;
+  };
+  for (State* child : {&lower, &upper}) {
+    if (child->emptyByParent || !holds(child->box)) continue;
+    child->point.assign(x->begin(), x->end());
+    child->pointError = error;
+    child->hasPoint = true;
+    break;
+  }
+}
+
+template <class S>
+bool LinearizedBounding<S>::newtonPoint(const State& state, S& error) const {
+  using std::abs;
+  const Box<S>& box = state.box;
+  const auto n = static_cast<std::size_t>(n_), m = static_cast<std::size_t>(m_);
+  newtonX_.resize(n);
+  newtonF_.resize(m);
+  newtonJ_.resize(m * n);
+  newtonStep_.resize(n);
+  S width = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    newtonX_[j] = state.hasStart ? state.start[j] : (box.lo[j] + box.hi[j]) / 2;
+    width = std::max<S>(width, box.hi[j] - box.lo[j]);
+  }
+  const S tolerance = S(kPointTolerance) * width;
+  for (int step = 0; step < kNewtonSteps; ++step) {
+    system__.evaluate(std::span<const S>(newtonX_), std::span<S>(newtonF_), std::span<S>(newtonJ_));
+    if (!newton_.factor(newtonJ_.data(), m_, n_, S(1e-10))) return false;
+    newton_.solve(newtonF_.data(), newtonStep_.data());
+    S size = 0, outside = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      newtonX_[j] -= newtonStep_[j];
+      size = std::max<S>(size, abs(newtonStep_[j]));
+      outside = std::max<S>({outside, box.lo[j] - newtonX_[j], newtonX_[j] - box.hi[j]});
+    }
+    // Outside the box by more than the last step: the rest of a converging iteration moves
+    // less than that, so its point would not be the box's.
+    if (!isFinite(size) || outside > size) return false;
+    if (size <= tolerance) {
+      // Quadratic convergence leaves an error far below the last step; four steps and the
+      // coordinates' rounding bound it.
+      S magnitude = 0;
+      for (const S& v : newtonX_) magnitude = std::max<S>(magnitude, abs(v));
+      error = 4 * size + 4 * ScalarTraits<S>::epsilon() * magnitude;
+      return true;
+    }
+  }
+  return false;
+}
+
+template <class S>
 bool LinearizedBounding<S>::simultaneousExcludes(const S& hh, const State& state) const {
   if (system_.excludes(hh, kMultiplierIterations)) return true;
   state.emptyHalves = system_.emptyHalves();
+  if (const S* d = system_.insideStep()) {
+    state.start.resize(std::size_t(n_));
+    for (int j = 0; j < n_; ++j) state.start[std::size_t(j)] = c_[std::size_t(j)] + d[j];
+    state.hasStart = true;
+  }
   return false;
 }
 

@@ -16,11 +16,13 @@
 #include "framework/core/interval.hpp"
 #include "framework/core/linearised_system.hpp"
 #include "framework/core/midrad.hpp"
+#include "framework/core/minimum_norm.hpp"
 #include "framework/core/multipliers.hpp"
 #include "framework/core/problem.hpp"
 #include "framework/core/registry.hpp"
 #include "framework/core/scalar.hpp"
 #include "framework/core/strategy.hpp"
+#include "framework/core/system.hpp"
 
 namespace ndc {
 
@@ -46,6 +48,16 @@ class BernsteinBounding final {
     mutable std::uint64_t emptyHalves = 0;
     /// This box is such a half of its parent: it holds no common zero, without a test.
     bool emptyByParent = false;
+    /// A point of the box within `pointError` (max norm) of a common zero, carried down from
+    /// an ancestor by LinearizedBounding (docs/subdivision.md, "Points carried down"); valid
+    /// when hasPoint.
+    std::vector<S> point;
+    S pointError = 0;
+    bool hasPoint = false;
+    /// Where Newton's iteration for this box's point starts: a point of the linearised zero
+    /// set inside the box that its test found (valid when hasStart), else the centre.
+    mutable std::vector<S> start;
+    mutable bool hasStart = false;
   };
 
   /// Converts every equation of `problem` to Bernstein form on `domain`.
@@ -184,13 +196,17 @@ class LinearizedBounding final {
   void root(State& state) const { bernstein_.root(state); }
   /// Children of `parent` at the midpoint of `axis` (Bernstein halving); a child that the
   /// parent's test showed to hold no common zero (State::emptyHalves) is marked so.
+  /// A child that holds the parent's point of M (State::point, found by Newton's iteration
+  /// from the parent's centre when the parent has none) takes it along.
   void halve(const State& parent, int axis, State& lower, State& upper) const {
     bernstein_.halve(parent, axis, lower, upper);
     lower.emptyByParent = axis < 32 && ((parent.emptyHalves >> (2 * axis)) & 1);
     upper.emptyByParent = axis < 32 && ((parent.emptyHalves >> (2 * axis + 1)) & 1);
+    carryPoint(parent, lower, upper);
   }
   /// Alg. 1 step (1): false when a Bernstein hull excludes 0 or, for m >= 2, when the
-  /// linearised system has no solution in the box (see the class comment).
+  /// linearised system has no solution in the box (see the class comment). A box that holds a
+  /// point of M (State::point) is kept without the tests, which could not discard it.
   bool mayContainZero(const State& state) const;
 
   /// The simultaneous test alone (for tests): true when the linearised system proves that
@@ -209,6 +225,10 @@ class LinearizedBounding final {
   /// 2-sphere in R^7 the best y was found within 8 steps for 96% of the boxes the exact
   /// linear program discards (docs/subdivision.md).
   static constexpr int kMultiplierIterations = 8;
+  /// Newton steps of newtonPoint, and the last step's size (relative to the box's largest
+  /// width) below which the iteration counts as converged.
+  static constexpr int kNewtonSteps = 6;
+  static constexpr double kPointTolerance = 1e-10;
   /// True when `equation` is subdivided in Bernstein form (total degree above 2, or 2 with at
   /// most kMaxDensePatch coefficients, or a piecewise affine one).
   static bool hasPatch(const Expression& equation);
@@ -219,6 +239,14 @@ class LinearizedBounding final {
   bool simultaneousExcludes(const S& hh, const State& state) const;
   /// `problem` with only the equations that have a patch.
   static Problem patchedEquations(const Problem& problem);
+  /// Gives each child the point of M that the parent holds (or that Newton's iteration finds
+  /// from the parent's centre) if the point lies in it by more than its error.
+  void carryPoint(const State& parent, State& lower, State& upper) const;
+  /// Newton's iteration (minimum-norm steps) from the state's start (or its box's centre) into
+  /// newtonX_; true when it converged (the last step below kPointTolerance times the box's
+  /// largest width), with `error` bounding the point's distance from a zero by four times the
+  /// last step.
+  bool newtonPoint(const State& state, S& error) const;
   /// The mean-value test of each equation without a patch, affine or not, after steps 1 and 2
   /// (for those rows); true when one excludes 0.
   bool meanValueExcludes(bool affine) const;
@@ -248,6 +276,10 @@ class LinearizedBounding final {
   mutable std::vector<S> c_, zero_;     // the box's centre; zero radii
   mutable std::vector<S> spread_;       // MidRadEvaluator::gradientSpread
   mutable LinearisedSystem<S> system_;  // steps 2 to 8
+  // Scratch of newtonPoint.
+  mutable MinimumNormSolver<S> newton_;
+  System<S> system__;
+  mutable std::vector<S> newtonX_, newtonF_, newtonJ_, newtonStep_;
 };
 
 static_assert(BoundingStrategy<BernsteinBounding<double>>);
