@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numeric>
 #include <random>
@@ -269,4 +270,82 @@ TEMPLATE_TEST_CASE("certificate: the graph test proves flats that lie obliquely 
     }
   }
   CHECK(proven == cases);
+}
+
+TEMPLATE_TEST_CASE("certificate: the facets' graph tests at once prove what each proves alone",
+                   "[certificate]", NDC_SCALARS) {
+  // Generated interval Jacobians J = A +- r (m x n, n = 3..8, k = n - m = 1..3), A Gaussian
+  // and r from 1e-3 to 3e-2. GraphTest::facetGraphs claims, for each axis a, that the columns
+  // other than a hold a block regular for every member of J. It must never claim an axis for
+  // which a member's other columns have rank below m: A built so that the columns other than
+  // one axis span only m - 1 dimensions (A itself is a member), and vertex members sampled
+  // for every claim. And it must prove at least 90% of the axes that graph() proves on each
+  // facet's columns alone.
+  using S = TestType;
+  ndc::test::PrecisionScope<S> precision;
+  std::mt19937 rng(47);
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> unit(0, 1);
+  int byGraph = 0, byBoth = 0, claims = 0, deficient = 0;
+  for (int n = 3; n <= 8; ++n) {
+    for (int k = 1; k <= std::min(3, n - 1); ++k) {
+      const int m = n - k;
+      ndc::GraphTest<S> graphTest(n, m);
+      for (int trial = 0; trial < 40; ++trial) {
+        Eigen::MatrixXd a(m, n);
+        for (int i = 0; i < m * n; ++i) a.data()[i] = normal(rng);
+        // Every fourth trial: the columns other than `bad` in an (m - 1)-dimensional space.
+        const int bad = trial % 4 == 0 ? static_cast<int>(rng() % n) : -1;
+        if (bad >= 0) {
+          const Eigen::MatrixXd u =
+              Eigen::MatrixXd::NullaryExpr(m, m - 1, [&] { return normal(rng); });
+          for (int j = 0; j < n; ++j) {
+            if (j != bad)
+              a.col(j) = u * Eigen::VectorXd::NullaryExpr(m - 1, [&] { return normal(rng); });
+          }
+        }
+        const double radius = std::pow(10.0, -3 + 1.5 * unit(rng));
+        std::vector<Interval<S>> jacobian;
+        for (int i = 0; i < m; ++i) {
+          for (int j = 0; j < n; ++j)
+            jacobian.emplace_back(S(a(i, j) - radius), S(a(i, j) + radius));
+        }
+        const std::uint64_t all = (std::uint64_t(1) << n) - 1;
+        const std::uint64_t proven =
+            graphTest.facetGraphs(std::span<const Interval<S>>(jacobian), all);
+        INFO("n = " << n << ", m = " << m << ", trial " << trial << ", radius " << radius);
+        for (int axis = 0; axis < n; ++axis) {
+          std::vector<int> free;
+          for (int j = 0; j < n; ++j) {
+            if (j != axis) free.push_back(j);
+          }
+          const bool alone =
+              graphTest.graph(std::span<const Interval<S>>(jacobian), std::span<const int>(free));
+          const bool claimed = (proven >> axis) & 1;
+          byGraph += alone;
+          byBoth += alone && claimed;
+          if (!claimed) continue;
+          ++claims;
+          INFO("axis " << axis << " claimed");
+          CHECK(axis != bad);
+          // Vertex members: every one has rank m on the columns other than `axis`.
+          for (int sample = 0; sample < 20; ++sample) {
+            Eigen::MatrixXd member(m, n - 1);
+            for (int i = 0; i < m; ++i) {
+              for (int t = 0; t < n - 1; ++t)
+                member(i, t) = a(i, free[t]) + (rng() % 2 ? radius : -radius);
+            }
+            const Eigen::JacobiSVD<Eigen::MatrixXd> svd(member);
+            CHECK(svd.singularValues()(m - 1) > 1e-9);
+          }
+        }
+        deficient += bad >= 0;
+      }
+    }
+  }
+  INFO(claims << " claims, " << byGraph << " axes proven by graph(), " << byBoth
+              << " of them by facetGraphs too, " << deficient << " deficient trials");
+  CHECK(claims > 1000);
+  CHECK(deficient > 100);
+  CHECK(byBoth >= 0.9 * byGraph);
 }

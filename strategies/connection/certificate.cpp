@@ -7,6 +7,7 @@
 #include <boost/multiprecision/eigen.hpp>
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 #include <optional>
 #include <type_traits>
@@ -176,6 +177,121 @@ bool GraphTest<S>::graph(std::span<const Interval<S>> jacobian, std::span<const 
     ++pick[p];
     for (int q = p + 1; q < drop; ++q) pick[q] = pick[q - 1] + 1;
   }
+}
+
+namespace {
+
+/// GraphTest::facetGraphs' working storage (threadScratch).
+template <class S>
+struct FacetWork {
+  std::vector<S> mid, square, inverse;  ///< m x n and m x m, column-major
+  std::vector<S> zc, zr;                ///< Z = Y J: centres and radii, m x n, row-major
+  std::vector<int> order;
+};
+
+}  // namespace
+
+template <class S>
+std::uint64_t GraphTest<S>::facetGraphs(std::span<const Interval<S>> jacobian,
+                                        std::uint64_t wanted) {
+  using std::abs;
+  const int m = m_, n = n_;
+  if (n > 64 || m < 1 || n <= m || wanted == 0) return 0;
+  const auto mm = std::size_t(m), nn = std::size_t(n);
+  std::optional<FacetWork<S>> fresh;
+  FacetWork<S>& w = threadScratch<S, FacetWork<S>>(fresh);
+  // B: the m pivot columns of the midpoint Jacobian (the best conditioned block).
+  w.mid.resize(mm * nn);
+  for (std::size_t i = 0; i < mm; ++i) {
+    for (std::size_t j = 0; j < nn; ++j) w.mid[j * mm + i] = jacobian[i * nn + j].midpoint();
+  }
+  pivotColumns(m, n, w.mid, w.order);
+  const std::vector<int>& order = w.order;  // B = order[0, m), the others after
+  w.square.resize(mm * mm);
+  for (std::size_t i = 0; i < mm; ++i) {
+    for (std::size_t t = 0; t < mm; ++t)
+      w.square[t * mm + i] = jacobian[i * nn + std::size_t(order[t])].midpoint();
+  }
+  if (!invertGaussJordan(m, w.square, w.inverse)) return 0;
+  // Z = Y J in midpoint-radius form: centre Y mid J, radius |Y| rad J plus the sums' rounding
+  // (gamma of their magnitude; the same margin as the leaf model's).
+  const S eps = ScalarTraits<S>::epsilon();
+  const S gamma = S(8 * (n + m + 8)) * eps;
+  const S tiny = S(std::numeric_limits<double>::min());
+  const S up = S(1) + gamma;
+  w.zc.resize(mm * nn);
+  w.zr.resize(mm * nn);
+  for (std::size_t i = 0; i < mm; ++i) {
+    for (std::size_t j = 0; j < nn; ++j) {
+      S centre = 0, magnitude = 0, radius = 0;
+      for (std::size_t l = 0; l < mm; ++l) {
+        const S y = w.inverse[l * mm + i];
+        const Interval<S>& a = jacobian[l * nn + j];
+        const S mid = a.midpoint();
+        const S rad = std::max<S>(a.upper() - mid, mid - a.lower()) * (S(1) + 2 * eps);
+        centre += y * mid;
+        magnitude += abs(y * mid);
+        radius += abs(y) * rad;
+      }
+      w.zc[i * nn + j] = centre;
+      w.zr[i * nn + j] = radius * up + gamma * magnitude + tiny;
+    }
+  }
+  // Row i of I - T summed over the block's columns below one, T's entry (i, t) in centre c +-
+  // radius r: sum |delta - c| + r, rounded up with gamma of the terms' magnitude.
+  const auto rowBelowOne = [&](const auto& entry, int i, int p, int u) {
+    S sum = 0, magnitude = 0;
+    for (int t = 0; t < m; ++t) {
+      const int column = t == p ? u : order[std::size_t(t)];
+      S c, r;
+      entry(i, column, c, r);
+      const S delta = S(i == t ? 1 : 0);
+      sum += abs(delta - c) + r;
+      magnitude += abs(delta) + abs(c) + r;
+    }
+    return sum * up + gamma * magnitude + tiny < 1;
+  };
+  const auto zEntry = [&](int i, int j, S& c, S& r) {
+    c = w.zc[std::size_t(i) * nn + std::size_t(j)];
+    r = w.zr[std::size_t(i) * nn + std::size_t(j)];
+  };
+  for (int i = 0; i < m; ++i) {
+    if (!rowBelowOne(zEntry, i, -1, -1)) return 0;
+  }
+  std::uint64_t proven = 0;
+  for (int t = m; t < n; ++t) proven |= std::uint64_t(1) << order[std::size_t(t)];
+  // An axis a = B_p: B with column p swapped for u outside B. mid Z_B' is near the eta matrix
+  // I + (z - e_p) e_p^T, z = mid Z_u; E, its inverse, is I with column p replaced by e:
+  // e_p = 1 / z_p, e_i = -z_i / z_p. T = E Z_B': rows i != p are Z_i + e_i Z_p, row p is
+  // e_p Z_p.
+  for (int p = 0; p < m; ++p) {
+    const int a = order[std::size_t(p)];
+    if (!((wanted >> a) & 1)) continue;
+    for (int t = m; t < n && !((proven >> a) & 1); ++t) {
+      const int u = order[std::size_t(t)];
+      const S zp = w.zc[std::size_t(p) * nn + std::size_t(u)];
+      if (!(abs(zp) > w.zr[std::size_t(p) * nn + std::size_t(u)])) continue;
+      const auto tEntry = [&](int i, int j, S& c, S& r) {
+        const S cp = w.zc[std::size_t(p) * nn + std::size_t(j)];
+        const S rp = w.zr[std::size_t(p) * nn + std::size_t(j)];
+        if (i == p) {
+          const S e = 1 / zp;
+          c = e * cp;
+          r = (abs(e) * rp) * up + gamma * abs(c) + tiny;
+          return;
+        }
+        const S e = -w.zc[std::size_t(i) * nn + std::size_t(u)] / zp;
+        const S ci = w.zc[std::size_t(i) * nn + std::size_t(j)];
+        const S ri = w.zr[std::size_t(i) * nn + std::size_t(j)];
+        c = ci + e * cp;
+        r = (ri + abs(e) * rp) * up + gamma * (abs(ci) + abs(e * cp)) + tiny;
+      };
+      bool regular = true;
+      for (int i = 0; i < m && regular; ++i) regular = rowBelowOne(tEntry, i, p, u);
+      if (regular) proven |= std::uint64_t(1) << a;
+    }
+  }
+  return proven & wanted;
 }
 
 template <class S>

@@ -585,6 +585,11 @@ class AdaptiveCrossing {
     std::vector<Interval<S>> jacobian;
     GraphTest<S> test;
     bool ready = false;
+    /// J over the whole leaf by evaluation (leafJacobian): -1 not yet, 0 a run failed, 1 in
+    /// `whole`, with `wholeExcluded` (some F_i - c_i provably has no zero on the leaf).
+    std::int8_t wholeKnown = -1;
+    bool wholeExcluded = false;
+    std::vector<Interval<S>> whole;
   };
 
   /// A block certified by a task of mergeBlocks, before it is numbered.
@@ -1353,8 +1358,11 @@ class AdaptiveCrossing {
   bool cellGraph(std::int32_t leaf, const RootForms& rf, LeafTests& t) {
     if (graph_[leaf] < 0) {
       // By evaluation first (polynomial in n); the Bernstein hulls where it does not prove it.
-      bool excluded = false;
-      graph_[leaf] = byEvaluation_ && evaluatedGraph(leafBox(leaf), -1, excluded, t);
+      thread_local std::vector<int> all;
+      all.resize(n_);
+      std::iota(all.begin(), all.end(), 0);
+      graph_[leaf] = byEvaluation_ && leafJacobian(leaf, t) &&
+                     t.test.graph(std::span<const Interval<S>>(t.whole), all);
       if (!graph_[leaf]) {
         prepare(leaf, rf, t);
         graph_[leaf] = graphOf(t.patches, rf.margins, t.jacobian, t.test);
@@ -1363,16 +1371,20 @@ class AdaptiveCrossing {
     return graph_[leaf] == 1;
   }
 
-  /// The graph test with J(X) from midpoint-radius runs of the programs over `box` (whole, or
-  /// its face fixing axis `fixed` when fixed >= 0; that face's box is given): true when some m
-  /// columns of the free axes form a regular block. `excluded`: F - c provably has no zero on
-  /// the box (for a face, that alone passes the face graph test).
+  /// J over the whole leaf by evaluation into t.whole, once per LeafTests (the cell's graph test
+  /// and the face graph tests share it); false when a run failed.
+  bool leafJacobian(std::int32_t leaf, LeafTests& t) const {
+    if (t.wholeKnown < 0)
+      t.wholeKnown = evaluatedJacobian(leafBox(leaf), t.whole, t.wholeExcluded) ? 1 : 0;
+    return t.wholeKnown == 1;
+  }
+
+  /// The graph test with J(X) from midpoint-radius runs of the programs over the face `box` of
+  /// a leaf that fixes axis `fixed`: true when some m columns of the free axes form a regular
+  /// block. `excluded`: F - c provably has no zero on the face (that alone passes the face
+  /// graph test).
   bool evaluatedGraph(const Box<S>& box, int fixed, bool& excluded, LeafTests& t) const {
-    thread_local std::vector<int> all;
-    all.resize(n_);
-    std::iota(all.begin(), all.end(), 0);
     if (!evaluatedJacobian(box, t.jacobian, excluded)) return false;
-    if (fixed < 0) return t.test.graph(t.jacobian, all);
     return excluded || t.test.graph(t.jacobian, freeAxes(fixed));
   }
 
@@ -1432,15 +1444,23 @@ class AdaptiveCrossing {
       const Box<S> box = leafBox(leaf);
       // J over the whole leaf encloses J over each face: one evaluation proves most faces
       // (a face's own evaluation where it does not).
-      thread_local std::vector<Interval<S>> whole;
-      bool wholeExcluded = false;
-      const bool wholeKnown = byEvaluation_ && evaluatedJacobian(box, whole, wholeExcluded);
+      const bool wholeKnown = byEvaluation_ && leafJacobian(leaf, t);
+      const std::vector<Interval<S>>& whole = t.whole;
       int failed = -1;
       // A facet the leaf model shows M_c misses needs no test (docs/crossing.md, "Facets
       // first").
       const auto met = [&](int a, int side) { return facetMet(facetsMet_[leaf], a, side); };
+      // Every facet's graph test on the whole leaf's J at once (GraphTest::facetGraphs), each
+      // axis it leaves by the test of its own blocks.
+      std::uint64_t wanted = 0, proven = 0;
+      for (int a = 0; a < n_ && a < 64; ++a) {
+        if (met(a, 0) || met(a, 1)) wanted |= std::uint64_t(1) << a;
+      }
+      if (wholeKnown && n_ <= 64)
+        proven = t.test.facetGraphs(std::span<const Interval<S>>(whole), wanted);
       for (int a = 0; a < n_ && failed < 0; ++a) {
         if (!met(a, 0) && !met(a, 1)) continue;
+        if (a < 64 && ((proven >> a) & 1)) continue;
         if (wholeKnown && t.test.graph(std::span<const Interval<S>>(whole), freeAxes(a))) continue;
         for (int side = 0; side < 2 && failed < 0; ++side) {
           if (!met(a, side)) continue;
