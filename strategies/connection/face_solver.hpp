@@ -524,22 +524,24 @@ class FaceSolver {
       width = std::max<S>(width, box.hi[j] - box.lo[j]);
     }
     const S eps = ScalarTraits<S>::epsilon();
-    Matrix<S>& jf = newtonJ_;
-    Vector<S>& rhs = newtonRhs_;
+    std::vector<S>& jf = newtonJ_;  // J over the free axes, m x m, column-major
+    std::vector<S>& rhs = newtonRhs_;
+    std::vector<S>& step = newtonStep_;
     std::vector<S>& x = newtonX_;
     std::vector<S>& trial = newtonTrial_;
-    jf.resize(m_, m_);
+    jf.resize(std::size_t(m_) * m_);
     rhs.resize(m_);
+    step.resize(m_);
     x.assign(point_.begin(), point_.end());
     trial.resize(m_);
-    // max_i |F_i - c_i| at the free coordinates `at`; the Jacobian columns into jf.
+    // max_i |F_i - c_i| at the free coordinates `at`; the Jacobian into jacobian_.
     const auto residual = [&](const std::vector<S>& at) {
       for (int j = 0; j < m_; ++j) x[free_[j]] = at[j];
       system_->evaluate(x, f_, jacobian_);
       S r = 0;
       for (int i = 0; i < m_; ++i) {
-        rhs(i) = f_[i] - level_[i];
-        r = std::max<S>(r, abs(rhs(i)));
+        rhs[i] = f_[i] - level_[i];
+        r = std::max<S>(r, abs(rhs[i]));
       }
       return r;
     };
@@ -549,30 +551,38 @@ class FaceSolver {
     // the residual by less than half over three iterations, y sits near a local minimum of |F - c|
     // that is not a root, as on a face M passes close to but misses.
     S history[3] = {r, r, r};
+    S previous = -1;  // the last full step's size
     for (int iteration = 0; iteration < 60; ++iteration) {
       if (r == 0) return true;
       if (iteration >= 3 && !(r < history[iteration % 3] / 2)) return residualWithinRounding(y);
       history[iteration % 3] = r;
       for (int i = 0; i < m_; ++i) {
-        for (int j = 0; j < m_; ++j) jf(i, j) = jacobian_[std::size_t(i) * n_ + free_[j]];
+        for (int j = 0; j < m_; ++j)
+          jf[std::size_t(j) * m_ + i] = jacobian_[std::size_t(i) * n_ + free_[j]];
       }
-      Eigen::FullPivLU<Matrix<S>>& lu = lu_;
-      lu.compute(jf);
-      if (lu.rank() < m_) return false;
-      const Vector<S> step = lu.solve(rhs);
+      // The step J^-1 (F - c) by Gauss-Jordan with partial pivoting (no allocation; a pivot
+      // below m eps of the largest entry: singular).
+      if (!invertGaussJordan(m_, jf, newtonInverse_)) return false;
       S size = 0, scale = 1;
       for (int j = 0; j < m_; ++j) {
-        size = std::max<S>(size, abs(step(j)));
+        S sum = 0;
+        for (int i = 0; i < m_; ++i) sum += newtonInverse_[std::size_t(i) * m_ + j] * rhs[i];
+        step[j] = sum;
+        size = std::max<S>(size, abs(sum));
         scale = std::max<S>(scale, abs(y[j]));
       }
       if (size <= 64 * eps * scale) return true;
       // Where the face Jacobian is nearly singular the steps stall above 64 eps: stop when the
-      // residual is at rounding level.
-      if (size <= 1e-3 * width && residualWithinRounding(y)) return true;
+      // residual is at rounding level. Only a step that did not shrink to a quarter of the last
+      // one can be stalling (converging steps shrink far faster), so only then is the residual
+      // enclosed in interval arithmetic.
+      const bool stalling = previous >= 0 && size > previous / 4;
+      previous = size;
+      if (stalling && size <= 1e-3 * width && residualWithinRounding(y)) return true;
       // Damping: halve the step until it stays near the face and lowers the residual.
       const S lambda = halveStep<S>(30, [&](const S& t, int halving) {
         for (int j = 0; j < m_; ++j) {
-          trial[j] = y[j] - t * step(j);
+          trial[j] = y[j] - t * step[j];
           // Within two face widths (false for NaN).
           if (!(trial[j] >= box.lo[j] - 2 * width && trial[j] <= box.hi[j] + 2 * width))
             return false;
@@ -780,10 +790,9 @@ class FaceSolver {
   std::vector<FaceEnds> halfEnds_;                 ///< and their ends
   std::vector<S> root_;                            ///< recurse's Newton root
   std::vector<S> newtonX_, newtonTrial_;           ///< newton's point and trial step
-  Matrix<S> newtonJ_;
+  std::vector<S> newtonJ_, newtonInverse_;         ///< newton's J and its inverse, column-major
+  std::vector<S> newtonRhs_, newtonStep_;
   std::vector<S> krawczykJ_, krawczykInverse_;  // column-major
-  Eigen::FullPivLU<Matrix<S>> lu_;
-  Vector<S> newtonRhs_;
   std::vector<S> krawczykY_, krawczykX_;
   std::vector<Interval<S>> krawczykFy_, krawczykXi_;
   mutable std::vector<Interval<S>> intervalX_, roundingX_, gradient_;
