@@ -38,17 +38,22 @@ struct ProjectWork {
 
 template <class S>
 void NewtonProjection<S>::residualTolerance(std::span<const S> x, std::span<S> tol) const {
+  for (std::size_t i = 0; i < magnitudes_.size(); ++i) tol[i] = toleranceOf(int(i), x, i == 0);
+}
+
+template <class S>
+S NewtonProjection<S>::toleranceOf(int i, std::span<const S> x, bool fresh) const {
   using std::abs;
-  std::optional<ToleranceWork<S>> fresh;
-  ToleranceWork<S>& w = threadScratch<S, ToleranceWork<S>>(fresh);
+  std::optional<ToleranceWork<S>> own;
+  ToleranceWork<S>& w = threadScratch<S, ToleranceWork<S>>(own);
   std::vector<S>&absX = w.absX, &stack = w.stack;
-  absX.resize(x.size());
-  for (std::size_t j = 0; j < x.size(); ++j) absX[j] = abs(x[j]);
-  const S eps = ScalarTraits<S>::epsilon();
-  for (std::size_t i = 0; i < magnitudes_.size(); ++i) {
-    // tol_i = 2 (ops_i + deg_i) eps |F_i|(|x|): see the header.
-    tol[i] = S(2 * magnitudes_[i].count()) * eps * magnitudes_[i](absX, stack);
+  if (fresh || own) {
+    absX.resize(x.size());
+    for (std::size_t j = 0; j < x.size(); ++j) absX[j] = abs(x[j]);
   }
+  // tol_i = 2 (ops_i + deg_i) eps |F_i|(|x|): see the header.
+  const auto& magnitude = magnitudes_[std::size_t(i)];
+  return S(2 * magnitude.count()) * ScalarTraits<S>::epsilon() * magnitude(absX, stack);
 }
 
 template <class S>
@@ -67,12 +72,17 @@ ProjectedPoint<S> NewtonProjection<S>::project(std::span<S> x) const {
   // The componentwise tolerance plus the normwise one, 2 eps |x|_inf |grad F_i|_1: a
   // coordinate whose value at the root is 0 (M in a coordinate plane) otherwise never
   // converges, its componentwise rounding being 0. Needs `jacobian` at x.
+  // Equation by equation, each tol_i only where the normwise part alone does not pass F_i and
+  // only up to the first F_i that fails (the magnitudes are most of a step's cost far from M).
   const auto residualConverged = [&](const S& slack) {
-    residualTolerance(x, tol);
     const S normwise = 2 * eps * normInf<S>(x);
+    bool fresh = true;  // |x| not yet taken for this x
     for (int i = 0; i < m; ++i) {
       S gradient = 0;
       for (int j = 0; j < n; ++j) gradient += abs(jacobian[std::size_t(i) * n + j]);
+      if (abs(f[i]) <= slack * (normwise * gradient)) continue;
+      tol[i] = toleranceOf(i, std::span<const S>(x.data(), x.size()), fresh);
+      fresh = false;
       if (!(abs(f[i]) <= slack * (tol[i] + normwise * gradient))) return false;
     }
     return true;

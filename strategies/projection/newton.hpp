@@ -73,6 +73,9 @@ class NewtonProjection final {
   int maxIterations() const { return maxIterations_; }
 
  private:
+  /// tol_i(x) of equation i; `fresh`: x differs from the last call's in this thread.
+  S toleranceOf(int i, std::span<const S> x, bool fresh) const;
+
   const System<S>* system_;
   int maxIterations_;
   std::vector<MagnitudeBound<S>> magnitudes_;  ///< |F_i|(|x|) per equation
