@@ -3,8 +3,9 @@
 bench/run.sh after the peer benchmark:
 
 1. Cost per solution cell against n: `ndcontour experiment bench/per-cell.toml --jobs 1`
-   (rotated circles in R^3..R^8, rotated 2-spheres in R^3..R^7, depth 5), the time of each
-   stage per solution cell, next to the figures issue 14 started from.
+   (rotated circles in R^3..R^8, rotated 2-spheres in R^3..R^7, depth 5), run 7 times (once
+   with --quick), the median time of each stage per solution cell, next to the figures issue
+   14 started from.
 2. Thread speedup, when `solve` has `--threads`: the torus at depth 7 and the R^6 torus at
    depth 5 with one thread and with all cores, interleaved (at least 7 pairs), medians, spreads
    and the median of the pairs' ratios; the meshes of the two thread counts are compared byte
@@ -45,15 +46,23 @@ BEFORE = {("rotated-sphere", 3): 11, ("rotated-sphere", 4): 33, ("rotated-sphere
 STAGES = ("subdivision", "projection", "connection", "analysis")
 
 
-def per_cell(ndc, workdir, quick):
-    """The per-cell table from one experiment run."""
+def per_cell(ndc, workdir, quick, runs):
+    """The per-cell table from `runs` experiment runs: each problem's median time."""
     cmd = [ndc, "experiment", os.path.join(HERE, "per-cell.toml"), "--jobs", "1", "--out",
            workdir] + (["--quick"] if quick else [])
-    print("[per-cell] " + " ".join(cmd), file=sys.stderr, flush=True)
-    run(cmd)
-    rows = list(csv.DictReader(open(os.path.join(workdir, "per-cell", "per-cell.csv"))))
+    print(f"[per-cell] {runs} x " + " ".join(cmd), file=sys.stderr, flush=True)
+    # The R^3 runs take a few milliseconds on both cores: one slow start moves a single run's
+    # ratio by 1.5x, so every figure is the median of `runs` runs of the whole grid.
+    samples = {}
+    rows = []
+    for _ in range(runs):
+        shutil.rmtree(workdir, ignore_errors=True)
+        run(cmd)
+        rows = list(csv.DictReader(open(os.path.join(workdir, "per-cell", "per-cell.csv"))))
+        for r in rows:
+            samples.setdefault(r["problem"], []).append(r)
     lines = ["| manifold | n | depth | solution cells | certified cells | mesh vertices | total s | "
-             "µs / solution cell | " + " | ".join(f"{s} µs" for s in STAGES) +
+             "µs / solution cell (range) | " + " | ".join(f"{s} µs" for s in STAGES) +
              " | µs / mesh vertex | before µs / cell |", "|---" * (10 + len(STAGES)) + "|"]
     first = {}
     growth = []
@@ -61,16 +70,21 @@ def per_cell(ndc, workdir, quick):
         generator = r["problem"].rsplit("-n", 1)[0]
         n = int(r["n"])
         cells = max(1, int(r["cells.solution"]))
-        total = float(r["timing_s.total"])
+        runs_of = samples[r["problem"]]
+        median = lambda key: statistics.median(float(x[key]) for x in runs_of)  # noqa: E731
+        total = median("timing_s.total")
         us = 1e6 * total / cells
-        stages = " | ".join(f"{1e6 * float(r['timing_s.' + s]) / cells:.0f}" for s in STAGES)
+        lo = 1e6 * min(float(x["timing_s.total"]) for x in runs_of) / cells
+        hi = 1e6 * max(float(x["timing_s.total"]) for x in runs_of) / cells
+        stages = " | ".join(f"{1e6 * median('timing_s.' + s) / cells:.0f}" for s in STAGES)
         # Per mesh vertex: one per cell M crosses, whatever the bounding keeps besides.
         vertices = max(1, int(r["mesh.vertices"]))
         per_vertex = 1e6 * total / vertices
         before = BEFORE.get((generator, n)) if r["depth"] == "5" else None
         lines.append(f"| {generator} | {n} | {r['depth']} | {cells} | "
                      f"{r.get('topology.certified_cells', '')} | {vertices} | {total:.3g} | "
-                     f"{us:.0f} | {stages} | {per_vertex:.0f} | {before if before else '–'} |")
+                     f"{us:.1f} ({lo:.1f}-{hi:.1f}) | {stages} | {per_vertex:.0f} | "
+                     f"{before if before else '–'} |")
         first.setdefault(generator, (n, us, per_vertex))
         growth.append((generator, n, us, per_vertex))
     notes = []
@@ -80,7 +94,7 @@ def per_cell(ndc, workdir, quick):
             target = (last[1] / n0) ** 2
             notes.append(f"{generator}: {last[2] / us0:.1f}x per solution cell and "
                          f"{last[3] / pv0:.1f}x per mesh vertex from R^{n0} to R^{last[1]} "
-                         f"(target at most (n/n0)^2 = {target:.1f}x)")
+                         f"(medians of {runs} runs; target at most (n/n0)^2 = {target:.1f}x)")
     shown = "experiment bench/per-cell.toml --jobs 1 --out DIR" + (" --quick" if quick else "")
     return shown, lines, notes
 
@@ -161,11 +175,13 @@ def main(argv):
     if not os.access(ndc, os.X_OK):
         sys.exit(f"bench/self.py: {ndc} missing (scripts/build.sh)")
     repeats = args.repeats or (1 if args.quick else 3)
+    cell_runs = 1 if args.quick else 7
     workdir = tempfile.mkdtemp(prefix="ndc-self-bench-")
     load_start = open("/proc/loadavg").read().split()[:3]
     started = datetime.datetime.now(datetime.timezone.utc)
     try:
-        command, cell_lines, notes = per_cell(ndc, os.path.join(workdir, "per-cell"), args.quick)
+        command, cell_lines, notes = per_cell(ndc, os.path.join(workdir, "per-cell"), args.quick,
+                                              cell_runs)
         thread_lines = threads(ndc, workdir, args.quick, repeats)
         write_lines = writing(ndc, workdir, args.quick, repeats)
     finally:
@@ -178,8 +194,9 @@ def main(argv):
              f"{os.cpu_count()} cores, commit {commit}; load average {' '.join(load_start)} at "
              f"the start and {' '.join(load_end)} at the end; {repeats} interleaved run(s) per "
              "timed command (the thread rows: their pairs).", "",
-             f"**Cost per solution cell against n** (`ndcontour {command}`; stage times per "
-             "solution cell; *before*: the figures issue 14 was filed with, before the "
+             f"**Cost per solution cell against n** (`ndcontour {command}`, run {cell_runs} "
+             "time(s); the "
+             "median total and stage times per solution cell, the runs' range in brackets; *before*: the figures issue 14 was filed with, before the "
              "certificate and adaptive refinement of issue 12, which the connection column now "
              "includes):", ""] + cell_lines + [""] + [f"- {n}" for n in notes] + [""]
     if thread_lines is None:
