@@ -1574,7 +1574,7 @@ class AdaptiveCrossing {
   /// parallel and the result does not depend on their order.
   void certifyLeaf(std::int32_t c, const RootForms& rf, std::span<const std::int32_t> ps) {
     std::vector<Bernstein<S>> own;
-    LeafTests t{leafScratch(own), {}, graphTest_};
+    LeafTests t{leafScratch(own), {}, graphTest_, false, -1, false, {}};
     if (empty_[c] == 1) {
       // M_c misses the leaf; M may not (it lies 1e-8 h away): where it meets the leaf, the
       // isotopy from M to M_c needs the Jacobian's rank there.
