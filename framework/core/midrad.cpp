@@ -96,10 +96,11 @@ bool MidRadEvaluator<S>::buildForm(std::span<const S> origin) {
       hr[j * n + l] = ((diffRad + u_ * abs(diff)) / (abs(delta) * (1 - u_)) + u_ * abs(h)) * up_;
     }
   }
-  // H is symmetric: its midpoint, with |H_jl - mid| <= hr_jl + |hm_jl - mid|; exact zeros (a
+  // H is symmetric: its midpoint, with |H_jl - mid| <= hr_jl + |hm_jl - mid|, kept once per
+  // pair (j <= l; the loops over it add an entry off the diagonal to both rows); exact zeros (a
   // variable in no product) are left out.
   for (std::size_t j = 0; j < n; ++j)
-    for (std::size_t l = 0; l < n; ++l) {
+    for (std::size_t l = j; l < n; ++l) {
       const S& a = hm[j * n + l];
       const S& b = hm[l * n + j];
       if (a == 0 && b == 0 && hr[j * n + l] == 0 && hr[l * n + j] == 0) continue;
@@ -156,11 +157,16 @@ bool MidRadEvaluator<S>::runForm(std::span<const S> centre, std::span<const S> r
     mag[j] = abs(f.g0m[j]);
   }
   for (std::size_t t = 0; t < nonzeros; ++t) {
-    const S& c = d[f.column[t]];
-    const S term = f.hm[t] * c;
-    gm[f.row[t]] += term;
-    gr[f.row[t]] += f.hr[t] * abs(c);
-    mag[f.row[t]] += abs(term);
+    const std::uint32_t j = f.row[t], l = f.column[t];
+    const S term = f.hm[t] * d[l];
+    gm[j] += term;
+    gr[j] += f.hr[t] * abs(d[l]);
+    mag[j] += abs(term);
+    if (j == l) continue;
+    const S mirror = f.hm[t] * d[j];  // H_lj = H_jl
+    gm[l] += mirror;
+    gr[l] += f.hr[t] * abs(d[j]);
+    mag[l] += abs(mirror);
   }
   for (std::size_t j = 0; j < n; ++j) gr[j] = (gr[j] + gamma * mag[j]) * up;
   // F(c) = f_o + sum_j d_j (g_o,j + G_j) / 2.
@@ -203,7 +209,7 @@ bool MidRadEvaluator<S>::widen(S& fr, std::span<const S> w, S* spread, const S& 
   for (std::size_t j = 0; j < n && !wide; ++j) wide = w[j] != 0;
   if (!wide) return false;
   for (std::size_t j = 0; j < n; ++j) spread[j] = 0;
-  for (std::size_t t = 0; t < f.hm.size(); ++t) spread[f.row[t]] += f.habs[t] * w[f.column[t]];
+  addAbsH(w.data(), spread);
   const S* gm = &stackMid_[1];
   S reach = 0;
   for (std::size_t j = 0; j < n; ++j) {
@@ -232,12 +238,22 @@ bool MidRadEvaluator<S>::runWithCentre(std::span<const S> centre, std::span<cons
 }
 
 template <class S>
+void MidRadEvaluator<S>::addAbsH(const S* w, S* spread) const {
+  const QuadraticForm& f = *form_;
+  for (std::size_t t = 0; t < f.hm.size(); ++t) {
+    const std::uint32_t j = f.row[t], l = f.column[t];
+    spread[j] += f.habs[t] * w[l];
+    if (j != l) spread[l] += f.habs[t] * w[j];
+  }
+}
+
+template <class S>
 bool MidRadEvaluator<S>::gradientSpread(std::span<const S> radius, std::span<S> spread) const {
   if (!form_) return false;
   const QuadraticForm& f = *form_;
   const S up = S(1) + S(f.g0m.size() + 8) * u_;
   for (std::size_t j = 0; j < spread.size(); ++j) spread[j] = 0;
-  for (std::size_t t = 0; t < f.hm.size(); ++t) spread[f.row[t]] += f.habs[t] * radius[f.column[t]];
+  addAbsH(radius.data(), spread.data());
   for (std::size_t j = 0; j < spread.size(); ++j) spread[j] *= up;
   return true;
 }

@@ -115,11 +115,11 @@ class MidRadEvaluator {
   /// F = f_o + g_o . (x - o) + (x - o)^T H (x - o) / 2, each coefficient as midpoint and
   /// radius; H as its nonzero entries (j, l) in row order.
   struct QuadraticForm {
-    std::vector<S> origin;    // o (n)
-    S f0m, f0r;               // F(o)
-    std::vector<S> g0m, g0r;  // grad F(o) (n)
-    std::vector<std::uint32_t> row, column;
-    std::vector<S> hm, hr, habs;  // per nonzero of H; habs >= |H_jl| (rounded up)
+    std::vector<S> origin;                   // o (n)
+    S f0m, f0r;                              // F(o)
+    std::vector<S> g0m, g0r;                 // grad F(o) (n)
+    std::vector<std::uint32_t> row, column;  // row <= column: each symmetric pair once
+    std::vector<S> hm, hr, habs;             // per nonzero of H; habs >= |H_jl| (rounded up)
   };
   /// run() in the quadratic form.
   bool runForm(std::span<const S> centre, std::span<const S> radius, bool gradient) const;
@@ -127,6 +127,8 @@ class MidRadEvaluator {
   /// rounded up left in `spread` (n); false, and nothing changed, when every w_j is 0. Needs
   /// G(c) from runForm.
   bool widen(S& fr, std::span<const S> w, S* spread, const S& up) const;
+  /// spread += |H| w (habs; both rows of an entry off the diagonal).
+  void addAbsH(const S* w, S* spread) const;
   /// The quadratic form about `origin` from passes over the program; false when one fails
   /// (then run() stays the pass).
   bool buildForm(std::span<const S> origin);
