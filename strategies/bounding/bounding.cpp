@@ -156,7 +156,7 @@ LinearizedBounding<S>::LinearizedBounding(const Problem& problem, const Box<S>& 
     : bernstein_(patchedEquations(problem), domain),
       n_(problem.n()),
       m_(static_cast<int>(problem.equations.size())),
-      system__(problem) {
+      newtonSystem_(problem) {
   const auto n = static_cast<std::size_t>(n_), m = static_cast<std::size_t>(m_);
   // Enabled when the equations are coupled: for equations in disjoint variables a box holds a
   // common zero iff each F_i vanishes on its own factor of the box, which the per-equation
@@ -280,7 +280,8 @@ bool LinearizedBounding<S>::newtonPoint(const State& state, S& error) const {
   }
   const S tolerance = S(kPointTolerance) * width;
   for (int step = 0; step < kNewtonSteps; ++step) {
-    system__.evaluate(std::span<const S>(newtonX_), std::span<S>(newtonF_), std::span<S>(newtonJ_));
+    newtonSystem_.evaluate(std::span<const S>(newtonX_), std::span<S>(newtonF_),
+                           std::span<S>(newtonJ_));
     if (!newton_.factor(newtonJ_.data(), m_, n_, S(1e-10))) return false;
     newton_.solve(newtonF_.data(), newtonStep_.data());
     S size = 0, outside = 0;

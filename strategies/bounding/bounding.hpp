@@ -278,7 +278,7 @@ class LinearizedBounding final {
   mutable LinearisedSystem<S> system_;  // steps 2 to 8
   // Scratch of newtonPoint.
   mutable MinimumNormSolver<S> newton_;
-  System<S> system__;
+  System<S> newtonSystem_;
   mutable std::vector<S> newtonX_, newtonF_, newtonJ_, newtonStep_;
 };
 
