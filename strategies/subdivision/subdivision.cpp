@@ -39,6 +39,8 @@ namespace {
 
 /// The solution cells of one subtree of a parallel traversal: their indices, n per cell.
 struct CellList {
+  explicit CellList(int dim) : n(dim) {}
+
   int n = 0;
   std::int64_t visited = 0;
   std::vector<std::int32_t> index;
