@@ -129,6 +129,25 @@ struct FlatSystem {
   }
 };
 
+/// A leaf near p as the leaf model's tests draw them: width 2^-k (k < 12), its lower corner
+/// on the 1/64 grid of the width, from 0.3 widths above p to 1.3 below it on each axis (so p
+/// lies inside on most axes); the corner in `lo`.
+template <class S>
+ndc::Box<S> leafNear(const std::vector<double>& p, std::mt19937& rng, double& width,
+                     std::vector<double>& lo) {
+  std::uniform_real_distribution<double> unit(0, 1);
+  const auto n = p.size();
+  width = std::pow(2.0, -static_cast<int>(rng() % 12));
+  ndc::Box<S> box{std::vector<S>(n), std::vector<S>(n)};
+  lo.resize(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    lo[j] = p[j] - width * (std::round(64 * (1.6 * unit(rng) - 0.3)) / 64);
+    box.lo[j] = S(lo[j]);
+    box.hi[j] = S(lo[j] + width);
+  }
+  return box;
+}
+
 using ndc::Problem;
 using ndc::RunResult;
 using ndc::Settings;
@@ -474,14 +493,9 @@ TEMPLATE_TEST_CASE("crossing: a leaf model's facets decide linear systems", "[cr
       ndc::LinearisedSystem<S> linearised;
       std::vector<char> facets;
       for (int trial = 0; trial < 30; ++trial) {
-        const double width = std::pow(2.0, -static_cast<int>(rng() % 12));
-        ndc::Box<S> box{std::vector<S>(n), std::vector<S>(n)};
-        std::vector<double> lo(n);
-        for (int j = 0; j < n; ++j) {
-          lo[j] = p[j] - width * (std::round(64 * (1.6 * unit(rng) - 0.3)) / 64);
-          box.lo[j] = S(lo[j]);
-          box.hi[j] = S(lo[j] + width);
-        }
+        double width = 0;
+        std::vector<double> lo;
+        const ndc::Box<S> box = leafNear<S>(p, rng, width, lo);
         ndc::buildLeafModel(evaluators, box, std::span<const S>(level), model);
         const bool empty = ndc::facetsOfModel(model, linearised, facets);
         REQUIRE(facets.size() == std::size_t(2 * n));
@@ -530,14 +544,9 @@ TEMPLATE_TEST_CASE("crossing: a leaf model's band test decides linear systems", 
       ndc::LeafModel<S> model;
       ndc::LinearisedSystem<S> linearised;
       for (int trial = 0; trial < 30; ++trial) {
-        const double width = std::pow(2.0, -static_cast<int>(rng() % 12));
-        ndc::Box<S> box{std::vector<S>(n), std::vector<S>(n)};
-        std::vector<double> lo(n);
-        for (int j = 0; j < n; ++j) {
-          lo[j] = p[j] - width * (std::round(64 * (1.6 * unit(rng) - 0.3)) / 64);
-          box.lo[j] = S(lo[j]);
-          box.hi[j] = S(lo[j] + width);
-        }
+        double width = 0;
+        std::vector<double> lo;
+        const ndc::Box<S> box = leafNear<S>(p, rng, width, lo);
         INFO("n = " << n << ", system " << system << ", trial " << trial);
         // A tiny level: the band is M up to 1e-12 w.
         std::vector<S> level(m, S(1e-12 * width));
