@@ -479,7 +479,6 @@ TEMPLATE_TEST_CASE("crossing: a leaf model's facets decide linear systems", "[cr
   ndc::test::PrecisionScope<TestType> scope(128);
   using S = TestType;
   std::mt19937 rng(31);
-  std::uniform_real_distribution<double> unit(0, 1);
   int missed = 0, met = 0, emptyLeaves = 0;
   for (int n = 3; n <= 8; ++n) {
     for (int system = 0; system < 6; ++system) {
