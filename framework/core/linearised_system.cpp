@@ -78,6 +78,30 @@ std::uint64_t LinearisedSystem<S>::emptyHalves() const {
 }
 
 template <class S>
+bool LinearisedSystem<S>::solutionBox(std::vector<S>& lo, std::vector<S>& hi) const {
+  if (!kernelReady_) return false;
+  const S reach = kernelReach();
+  lo.resize(std::size_t(n_));
+  hi.resize(std::size_t(n_));
+  for (int j = 0; j < n_; ++j) {
+    solutionRange(j, reach, lo[std::size_t(j)], hi[std::size_t(j)]);
+    lo[std::size_t(j)] = std::max(lo[std::size_t(j)], -h[j]);
+    hi[std::size_t(j)] = std::min(hi[std::size_t(j)], h[j]);
+  }
+  return true;
+}
+
+template <class S>
+void LinearisedSystem<S>::solutionRange(int j, const S& reach, S& lo, S& hi) const {
+  // As emptyHalves: d_j within b_j - h_j of (N t)_j - a_j, (N t)_j in [tLo, tHi].
+  S tLo, tHi;
+  const S slack = kernelRange(j, reach, tLo, tHi);
+  const S spread = b_[j] - h[j] + slack;  // >= 0: b_j >= h_j
+  lo = tLo - a_[j] - spread;
+  hi = tHi - a_[j] + spread;
+}
+
+template <class S>
 S LinearisedSystem<S>::kernelReach() const {
   using std::abs;
   S reach = 0;

@@ -58,6 +58,11 @@ class LinearisedSystem {
   /// "Empty halves").
   std::uint64_t emptyHalves() const;
 
+  /// After excludes() returned false having run steps 7b and 7c: bounds lo_j <= d_j <= hi_j
+  /// (within -h_j..h_j) of every solution d, from step 7's bounds (what emptyHalves reads);
+  /// false (nothing written) otherwise.
+  bool solutionBox(std::vector<S>& lo, std::vector<S>& hi) const;
+
   /// For k = n - m = 2: which facets of the box (fixed axis j at its lower end, entry 2 j, or
   /// its upper end, entry 2 j + 1) may hold a solution, into `met` (2 n entries, 1: may). A
   /// facet d_j = +-h_j is ruled out when no point of the planar test's polygon in the kernel
@@ -95,6 +100,9 @@ class LinearisedSystem {
   /// k = 2, the t box otherwise, which hold N^T d for every solution d); returns the slack
   /// that covers the rounding of the range and of comparing it with h_j and b_j.
   S kernelRange(int j, const S& reach, S& lo, S& hi) const;
+  /// The range [lo, hi] of d_j over the solutions, from kernelRange and step 7's bound, its
+  /// rounding included.
+  void solutionRange(int j, const S& reach, S& lo, S& hi) const;
   /// Keeps the part of `polygon` (vertices (t_0, t_1) interleaved) where u . t <= bound
   /// (Sutherland-Hodgman); false when nothing is left.
   bool clip(std::vector<S>& polygon, const S& u0, const S& u1, const S& bound);

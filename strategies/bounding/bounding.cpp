@@ -313,8 +313,35 @@ bool LinearizedBounding<S>::simultaneousExcludes(const S& hh, const State& state
     state.start.resize(std::size_t(n_));
     for (int j = 0; j < n_; ++j) state.start[std::size_t(j)] = c_[std::size_t(j)] + d[j];
     state.hasStart = true;
+    return false;
   }
-  return false;
+  return contractedExcludes(state.box);
+}
+
+template <class S>
+bool LinearizedBounding<S>::contractedExcludes(const Box<S>& box) const {
+  // Every zero in the box lies in c + [lo, hi] (step 7's bounds); where that box is much
+  // smaller, the linearisation over it has a smaller remainder.
+  if (!system_.solutionBox(dLo_, dHi_)) return false;
+  S before = 0, after = 0;
+  for (int j = 0; j < n_; ++j) {
+    if (dLo_[j] > dHi_[j]) return true;  // no solution reaches the box along axis j
+    const S half = (dHi_[j] - dLo_[j]) / 2;
+    before += system_.h[j] * system_.h[j];
+    after += half * half;
+  }
+  if (!(after < S(kContraction) * before)) return false;
+  contracted_.lo.resize(std::size_t(n_));
+  contracted_.hi.resize(std::size_t(n_));
+  using std::abs;
+  for (int j = 0; j < n_; ++j) {
+    // c + lo rounded down and c + hi up (by the test's margin), within the box.
+    const S lo = c_[j] + dLo_[j], hi = c_[j] + dHi_[j];
+    contracted_.lo[j] = std::max<S>(box.lo[j], lo - tol_ * (abs(c_[j]) + abs(dLo_[j])));
+    contracted_.hi[j] = std::min<S>(box.hi[j], hi + tol_ * (abs(c_[j]) + abs(dHi_[j])));
+  }
+  const S hh = centreAndHalfWidths(contracted_);
+  return linearise() && system_.excludes(hh, kMultiplierIterations);
 }
 
 template <class S>

@@ -229,6 +229,8 @@ class LinearizedBounding final {
   /// width) below which the iteration counts as converged.
   static constexpr int kNewtonSteps = 6;
   static constexpr double kPointTolerance = 1e-10;
+  /// contractedExcludes runs when the solutions' box has |h'|^2 below this share of |h|^2.
+  static constexpr double kContraction = 0.5;
   /// True when `equation` is subdivided in Bernstein form (total degree above 2, or 2 with at
   /// most kMaxDensePatch coefficients, or a piecewise affine one).
   static bool hasPatch(const Expression& equation);
@@ -237,6 +239,10 @@ class LinearizedBounding final {
   /// Steps 3 to 8 on the linearisation of the box of `state` (hh = |h|_2^2); true when they
   /// discard it, else the halves they show empty go to state.emptyHalves.
   bool simultaneousExcludes(const S& hh, const State& state) const;
+  /// After steps 3 to 8 kept `box` without a point: the same steps on the box of step 7's
+  /// bounds on the solutions, when it is small enough (kContraction); true when they discard
+  /// it.
+  bool contractedExcludes(const Box<S>& box) const;
   /// `problem` with only the equations that have a patch.
   static Problem patchedEquations(const Problem& problem);
   /// Gives each child the point of M that the parent holds (or that Newton's iteration finds
@@ -276,6 +282,8 @@ class LinearizedBounding final {
   mutable std::vector<S> c_, zero_;     // the box's centre; zero radii
   mutable std::vector<S> spread_;       // MidRadEvaluator::gradientSpread
   mutable LinearisedSystem<S> system_;  // steps 2 to 8
+  mutable std::vector<S> dLo_, dHi_;    // contractedExcludes: the solutions' d
+  mutable Box<S> contracted_;           // and their box
   // Scratch of newtonPoint.
   mutable MinimumNormSolver<S> newton_;
   System<S> newtonSystem_;
