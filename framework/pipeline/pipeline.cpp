@@ -121,7 +121,8 @@ struct MemoryPlan {
 /// and the count at depth L is extrapolated by 2^k per level. At coarse depths the ratio per
 /// level is at most 2^k for a smooth M, so the extrapolation errs high; what it misses (a
 /// feature too small for the trial) is refused after the real subdivision, which counts
-/// exactly, and the address-space limit catches the rest.
+/// exactly, and the address-space limit catches the rest. The trial stops at the first depth
+/// with 2048 cells, or whose extrapolation fits the budget 64 times over.
 template <class Count>
 MemoryPlan planMemory(const Problem& problem, const Settings& settings, const Grid& grid,
                       const Count& count) {
@@ -143,9 +144,12 @@ MemoryPlan planMemory(const Problem& problem, const Settings& settings, const Gr
   const double crude = std::min(static_cast<double>(cellBudget(problem, L)),
                                 std::ldexp(1.0, std::min(problem.n() * L, 1000)));
   if (plan.bytes(crude) <= plan.budget) return plan;
-  // The trial: coarse depths until the count is large enough to extrapolate from, or a second
-  // of work is spent.
+  // The trial: coarse depths until the count is large enough to extrapolate from, or the
+  // extrapolation fits the budget kMargin times over (a run that clearly fits needs no finer
+  // count: the real subdivision's cap still stops one the trial underestimates), or a second of
+  // work is spent.
   constexpr std::size_t kEnough = 2048;
+  constexpr double kMargin = 64;
   constexpr double kTrialSeconds = 1.0;
   const auto start = Clock::now();
   for (int depth = std::max(1, problem.rootLevel); depth < L; ++depth) {
@@ -159,8 +163,9 @@ MemoryPlan planMemory(const Problem& problem, const Settings& settings, const Gr
       at.depth = depth;
       throw InputError(notAManifold(problem, at, cellBudget(problem, depth)));
     }
-    if (found >= kEnough || depth == L - 1 || secondsSince(start) > kTrialSeconds) {
-      const double estimate = static_cast<double>(found) * std::ldexp(1.0, k * (L - depth));
+    const double estimate = static_cast<double>(found) * std::ldexp(1.0, k * (L - depth));
+    if (found >= kEnough || plan.bytes(kMargin * estimate) <= plan.budget || depth == L - 1 ||
+        secondsSince(start) > kTrialSeconds) {
       if (plan.bytes(estimate) > plan.budget)
         throw InputError(plan.overBudget(
             problem, settings, estimate, "",
