@@ -159,6 +159,11 @@ class IntervalBounding final {
 ///    The y is found by reweighted least squares (MultiplierTest, at most
 ///    kMultiplierIterations steps) and checked with bounded rounding, so an inexact y only
 ///    discards fewer boxes.
+///  - contraction: a box these tests keep without a point of the linearised zero set has all
+///    its zeros in c + [lo, hi], the bounds on d_j that the null-space test leaves
+///    (LinearisedSystem::solutionBox); where that sub-box is small (|h'|^2 below kContraction
+///    |h|^2) the tests run once more on the sub-box's own linearisation, whose remainder is
+///    smaller (docs/subdivision.md, "Contraction").
 /// For an equation of total degree 2 without piecewise leaves the remainder is that of its
 /// Taylor form, F_i(c + d) = F_i(c) + grad F_i(c) . d + d^T H_i d / 2 exactly, so
 /// |F_i(c + d) - F_i(c) - J_c,i d| <= sum_j (rad grad_j F_i(c) + rad J_ij(X) / 2) h_j with
