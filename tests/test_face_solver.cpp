@@ -115,11 +115,12 @@ bool placeAxis(Place place, double pj, double w, double u, double& lo, double& h
   return lo <= pj && pj < hi;
 }
 
-/// Solves the face (fixed axes at p, free box `lo..hi`) by evaluation; false if undecided.
-template <class S>
-bool solveFace(const ndc::System<S>& system, const std::vector<double>& p,
-               const std::vector<double>& lo, const std::vector<double>& hi,
-               std::vector<std::vector<S>>& roots) {
+/// Solves the face (fixed axes at p, free box `lo..hi`) by evaluation, with the caller's
+/// exclusion test `excludesFace`; false if undecided.
+template <class S, class ExcludesFace>
+bool solveFaceWith(const ndc::System<S>& system, const std::vector<double>& p,
+                   const std::vector<double>& lo, const std::vector<double>& hi,
+                   std::vector<std::vector<S>>& roots, const ExcludesFace& excludesFace) {
   const int n = system.n(), m = system.m();
   std::vector<S> point(n);
   for (int j = 0; j < n; ++j) point[j] = S(p[j]);
@@ -129,7 +130,15 @@ bool solveFace(const ndc::System<S>& system, const std::vector<double>& p,
   FaceEnds ends{std::vector<bool>(m, false), std::vector<bool>(m, false)};
   FaceSolver<S> solver(system, 20, std::vector<S>(m, S(0)), S(0));
   roots.clear();
-  return solver.solveByEvaluation(point, freeAxes, face, ends, roots);
+  return solver.solveByEvaluation(point, freeAxes, face, ends, roots, excludesFace);
+}
+
+/// solveFaceWith without a test of the caller's.
+template <class S>
+bool solveFace(const ndc::System<S>& system, const std::vector<double>& p,
+               const std::vector<double>& lo, const std::vector<double>& hi,
+               std::vector<std::vector<S>>& roots) {
+  return solveFaceWith(system, p, lo, hi, roots, [] { return false; });
 }
 
 }  // namespace
@@ -183,4 +192,57 @@ TEMPLATE_TEST_CASE("face solver: planted roots on halving planes and near face e
   // Both outcomes are exercised.
   CHECK(found >= 20);
   CHECK(empty >= 20);
+}
+
+TEMPLATE_TEST_CASE("face solver: the caller's exclusion test is asked once, where a round fails",
+                   "[crossing][face-solver]", NDC_SCALARS) {
+  // The crossing connection passes the leaf model's multiplier test, which costs more than a
+  // round of the solver. On planted faces: a face of 1e-6 around p is decided by the first
+  // round (Krawczyk proves p unique), so the test is never asked; on faces of width 1/2 to 2
+  // (the first round decides few) it is asked at most once per face, never changes the
+  // roots when it says no, and when it says yes (a proof the caller vouches for) the face
+  // has no roots.
+  ndc::test::PrecisionScope<TestType> scope(128);
+  using S = TestType;
+  std::mt19937 rng(43);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int asked = 0, wide = 0;
+  for (int n = 4; n <= 8; ++n) {
+    for (int trial = 0; trial < 12; ++trial) {
+      const Planted sys = planted(n, trial % 3 == 2, rng);
+      const ndc::System<S> system(sys.problem);
+      const int m = n - 2;
+      INFO("n = " << n << ", trial " << trial);
+      std::vector<double> lo(m), hi(m);
+      for (int j = 0; j < m; ++j) lo[j] = sys.p[j] - 0.5e-6, hi[j] = sys.p[j] + 0.5e-6;
+      int calls = 0;
+      const auto no = [&] { return ++calls, false; };
+      std::vector<std::vector<S>> roots;
+      REQUIRE(solveFaceWith(system, sys.p, lo, hi, roots, no));
+      CHECK(roots.size() == 1u);
+      CHECK(calls == 0);
+      // A wide face: the same roots with a test that says no, asked at most once.
+      const double w = 0.5 + 1.5 * unit(rng);
+      for (int j = 0; j < m; ++j) lo[j] = sys.p[j] - w * unit(rng), hi[j] = lo[j] + w;
+      std::vector<std::vector<S>> plain, with;
+      const bool decided = solveFace(system, sys.p, lo, hi, plain);
+      calls = 0;
+      CHECK(solveFaceWith(system, sys.p, lo, hi, with, no) == decided);
+      CHECK(calls <= 1);
+      asked += calls;
+      ++wide;
+      if (decided) {
+        REQUIRE(with.size() == plain.size());
+        for (std::size_t r = 0; r < with.size(); ++r)
+          for (int j = 0; j < n; ++j) CHECK(bool(with[r][j] == plain[r][j]));
+      }
+      // A test that says yes ends the face without roots wherever it is asked.
+      calls = 0;
+      std::vector<std::vector<S>> cut;
+      const bool ended = solveFaceWith(system, sys.p, lo, hi, cut, [&] { return ++calls, true; });
+      if (calls == 1) CHECK((ended && cut.empty()));
+    }
+  }
+  INFO(asked << " of " << wide << " wide faces asked the test");
+  CHECK(asked > 0);
 }

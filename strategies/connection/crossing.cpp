@@ -710,14 +710,19 @@ class AdaptiveCrossing {
     if (model) {
       const FacePreconditioner<S>* pre = nullptr;
       if (faceExcluded(*model, box, fixed, side) ||
-          ((pre = preconditioner()) && faceKrawczykExcludes(*model, *pre, box, fixed, side)) ||
-          faceMultipliersExclude(*model, box, fixed, side, kFaceMultiplierSteps))
+          ((pre = preconditioner()) && faceKrawczykExcludes(*model, *pre, box, fixed, side)))
         return faceOutcome(std::move(r), w.roots, box, w.freeAxes, w.ends);
     }
+    // The model's multiplier test, where the solver's first round on the face decides nothing
+    // (most faces it excludes would take the solver many boxes; most others one round).
+    const auto multipliersExclude = [&] {
+      return model && faceMultipliersExclude(*model, box, fixed, side, kFaceMultiplierSteps);
+    };
     FaceSolver<S>& solver = w.solver;
     solver.reset(in_.system, maxFaceDepth_, std::span<const S>(level_), position_.slack);
     if (m_ > 1 && byEvaluation_ &&
-        solver.solveByEvaluation(w.point, w.freeAxes, w.faceBox, w.ends, w.roots)) {
+        solver.solveByEvaluation(w.point, w.freeAxes, w.faceBox, w.ends, w.roots,
+                                 multipliersExclude)) {
       r.certain = r.proven = true;
     } else {
       w.roots.clear();

@@ -191,6 +191,16 @@ class FaceSolver {
   bool solveByEvaluation(std::span<const S> point, std::span<const int> freeAxes,
                          const Box<S>& face, const FaceEnds& ends,
                          std::vector<std::vector<S>>& roots) {
+    return solveByEvaluation(point, freeAxes, face, ends, roots, [] { return false; });
+  }
+
+  /// solveByEvaluation with a test of the caller's, `excludesFace()` (true: the face holds no
+  /// root, a proof), asked once, when the first enclosure of the whole face neither excludes
+  /// it nor proves a root unique: a face that one round decides never pays for the test.
+  template <class ExcludesFace>
+  bool solveByEvaluation(std::span<const S> point, std::span<const int> freeAxes,
+                         const Box<S>& face, const FaceEnds& ends,
+                         std::vector<std::vector<S>>& roots, const ExcludesFace& excludesFace) {
     point_.assign(point.begin(), point.end());
     free_.assign(freeAxes.begin(), freeAxes.end());
     certain_ = true;
@@ -199,7 +209,7 @@ class FaceSolver {
     boxes_ = 0;
     faceWidth_.resize(m_);
     for (int j = 0; j < m_; ++j) faceWidth_[j] = face.hi[j] - face.lo[j];
-    return evaluationRecurse(face, face, ends, 0, roots);
+    return evaluationRecurse(face, face, ends, 0, roots, &excludesFace);
   }
 
   /// Whether every decision of the last solve is a proof: exclusions by coefficient signs
@@ -279,8 +289,10 @@ class FaceSolver {
   /// part of the face the box answers for (its crossings are the roots inside it); `search`,
   /// inside it, holds all of owner's roots: the Krawczyk operator contracts it, since every
   /// root in X lies in K(X), before it is halved.
+  /// `excludesFace` (null below the whole face): solveByEvaluation's.
+  template <class ExcludesFace>
   bool evaluationRecurse(const Box<S>& owner, Box<S> search, const FaceEnds& ends, int depth,
-                         std::vector<std::vector<S>>& roots) {
+                         std::vector<std::vector<S>>& roots, const ExcludesFace* excludesFace) {
     for (int round = 0;; ++round) {
       // Exclusion, J(X) and F(mid X) from midpoint-radius runs of the programs.
       bool excluded = false;
@@ -295,6 +307,7 @@ class FaceSolver {
         roots.push_back(fullPoint(root));
         return true;
       }
+      if (round == 0 && excludesFace && (*excludesFace)()) return true;  // no root on the face
       // Contraction: X ∩ K(X) holds every root of X; keep it while it shrinks X at least as
       // much as a halving would.
       Box<S> contracted = search;
@@ -318,8 +331,9 @@ class FaceSolver {
     FaceEnds lowerEnds = ends, upperEnds = ends;
     lowerEnds.upper[axis] = false;
     upperEnds.lower[axis] = false;
-    return evaluationRecurse(lowerOwner, std::move(lower), lowerEnds, depth + 1, roots) &&
-           evaluationRecurse(upperOwner, std::move(upper), upperEnds, depth + 1, roots);
+    const ExcludesFace* none = nullptr;
+    return evaluationRecurse(lowerOwner, std::move(lower), lowerEnds, depth + 1, roots, none) &&
+           evaluationRecurse(upperOwner, std::move(upper), upperEnds, depth + 1, roots, none);
   }
 
   /// Whether K(X) from the last krawczyk() on X is narrower than a quarter of X on every axis,
