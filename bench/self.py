@@ -5,7 +5,7 @@ bench/run.sh after the peer benchmark:
 1. Cost per solution cell against n: `ndcontour experiment bench/per-cell.toml --jobs 1`
    (rotated circles in R^3..R^8, rotated 2-spheres in R^3..R^7, depth 5), run 7 times (once
    with --quick), the median time of each stage per solution cell, next to the figures issue
-   14 started from.
+   14 started from; then each manifold's smallest and largest n on one thread, alternated.
 2. Thread speedup, when `solve` has `--threads`: the torus at depth 7 and the R^6 torus at
    depth 5 with one thread and with all cores, interleaved (at least 7 pairs), medians, spreads
    and the median of the pairs' ratios; the meshes of the two thread counts are compared byte
@@ -95,8 +95,48 @@ def per_cell(ndc, workdir, quick, runs):
             notes.append(f"{generator}: {last[2] / us0:.1f}x per solution cell and "
                          f"{last[3] / pv0:.1f}x per mesh vertex from R^{n0} to R^{last[1]} "
                          f"(medians of {runs} runs; target at most (n/n0)^2 = {target:.1f}x)")
+    notes += one_thread(ndc, os.path.join(workdir, "per-cell", "problems"), rows, runs)
     shown = "experiment bench/per-cell.toml --jobs 1 --out DIR" + (" --quick" if quick else "")
     return shown, lines, notes
+
+
+def one_thread(ndc, problems, rows, runs):
+    """Each manifold's growth from its smallest to its largest n on one thread.
+
+    The grid runs each solve on all cores, where a run of the smallest problem is as much
+    thread start-up as work; the cost per cell is a cost of work, so its growth is also measured
+    with `--threads 1`, the two ends of each manifold alternated `runs` times."""
+    ends = {}
+    for r in rows:
+        ends.setdefault(r["problem"].rsplit("-n", 1)[0], []).append(r)
+    notes = []
+    for generator, of in ends.items():
+        pair = (of[0], of[-1])
+        if pair[0] is pair[1]:
+            continue
+        samples = {r["problem"]: [] for r in pair}
+        for _ in range(runs):
+            for r in pair:
+                _, text = run([ndc, "solve", os.path.join(problems, r["problem"] + ".toml"),
+                               "--depth", r["depth"], "--threads", "1", "--json"])
+                summary = json.loads(text)
+                samples[r["problem"]].append((summary["timing_s"]["total"],
+                                              max(1, summary["cells"]["solution"]),
+                                              max(1, summary["mesh"]["vertices"])))
+        # Per cell and per vertex, each end's median time over its (fixed) counts.
+        first, last = (samples[r["problem"]] for r in pair)
+        per = lambda s, i: statistics.median(t for t, *_ in s) / s[0][i]  # noqa: E731
+        ratios = sorted((b[0] / b[1]) / (a[0] / a[1]) for a, b in zip(first, last))
+        n0, n1 = int(pair[0]["n"]), int(pair[1]["n"])
+        notes.append(f"{generator}, one thread (`solve FILE --depth {pair[0]['depth']} "
+                     f"--threads 1 --json`, R^{n0} and R^{n1} alternated {runs} time(s)): "
+                     f"{per(last, 1) / per(first, 1):.1f}x per solution cell "
+                     f"({1e6 * per(first, 1):.1f} -> {1e6 * per(last, 1):.1f} µs; the pairs' "
+                     f"ratios {ratios[0]:.1f}-{ratios[-1]:.1f}x) and "
+                     f"{per(last, 2) / per(first, 2):.1f}x per mesh vertex (target at most "
+                     f"{(n1 / n0) ** 2:.1f}x)")
+        print(f"[per-cell] {notes[-1]}", file=sys.stderr, flush=True)
+    return notes
 
 
 def threads(ndc, workdir, quick, repeats):
