@@ -9,7 +9,8 @@ bench/run.sh after the peer benchmark:
 2. Thread speedup, when `solve` has `--threads`: the torus at depth 7 and the R^6 torus at
    depth 5 with one thread and with all cores, interleaved (at least 7 pairs), medians, spreads
    and the median of the pairs' ratios; the meshes of the two thread counts are compared byte
-   for byte.
+   for byte. The one-thread runs are pinned to the fastest core (the cores' speeds are measured
+   first, and they bound the speedup: the *ceiling* column).
 3. Output writing: the torus at depth 8 with `--out` (binary PLY) against `--json` (no files);
    writing is (wall - timing_s.total) of the first minus the same of the second.
 
@@ -46,7 +47,38 @@ BEFORE = {("rotated-sphere", 3): 11, ("rotated-sphere", 4): 33, ("rotated-sphere
 STAGES = ("subdivision", "projection", "connection", "analysis")
 
 
-def per_cell(ndc, workdir, quick, runs):
+def core_speeds(ndc, quick):
+    """Each core's speed against the fastest, from the torus on one thread pinned to each core
+    (the smallest of 3 runs), and the fastest core; None where the process cannot pin.
+
+    A virtual machine's cores need not be equal (one of this project's 2-core machines ran the
+    same single-thread solve in 1.06 s on one core and 1.61 s on the other), so the one-thread
+    runs are pinned to the fastest core, and the thread rows' ceiling is the sum of the speeds."""
+    if not hasattr(os, "sched_getaffinity") or not shutil.which("taskset"):
+        return None
+    cores = sorted(os.sched_getaffinity(0))
+    if len(cores) < 2:
+        return None
+    problem = os.path.join(ROOT, "experiments/problems/torus.toml")
+    best = {c: float("inf") for c in cores}
+    for _ in range(1 if quick else 3):
+        for c in cores:
+            _, text = run(["taskset", "-c", str(c), ndc, "solve", problem, "--depth",
+                           "4" if quick else "6", "--threads", "1", "--json"])
+            best[c] = min(best[c], json.loads(text)["timing_s"]["total"])
+    fastest = min(best, key=best.get)
+    speeds = {c: best[fastest] / t for c, t in best.items()}
+    print("[cores] " + ", ".join(f"cpu{c} {v:.2f}" for c, v in speeds.items()), file=sys.stderr,
+          flush=True)
+    return speeds, fastest
+
+
+def pinned(cores, cmd):
+    """cmd on the fastest core, when the cores were measured."""
+    return cmd if cores is None else ["taskset", "-c", str(cores[1])] + cmd
+
+
+def per_cell(ndc, workdir, quick, runs, cores):
     """The per-cell table from `runs` experiment runs: each problem's median time."""
     cmd = [ndc, "experiment", os.path.join(HERE, "per-cell.toml"), "--jobs", "1", "--out",
            workdir] + (["--quick"] if quick else [])
@@ -95,17 +127,17 @@ def per_cell(ndc, workdir, quick, runs):
             notes.append(f"{generator}: {last[2] / us0:.1f}x per solution cell and "
                          f"{last[3] / pv0:.1f}x per mesh vertex from R^{n0} to R^{last[1]} "
                          f"(medians of {runs} runs; target at most (n/n0)^2 = {target:.1f}x)")
-    notes += one_thread(ndc, os.path.join(workdir, "per-cell", "problems"), rows, runs)
+    notes += one_thread(ndc, os.path.join(workdir, "per-cell", "problems"), rows, runs, cores)
     shown = "experiment bench/per-cell.toml --jobs 1 --out DIR" + (" --quick" if quick else "")
     return shown, lines, notes
 
 
-def one_thread(ndc, problems, rows, runs):
+def one_thread(ndc, problems, rows, runs, cores):
     """Each manifold's growth from its smallest to its largest n on one thread.
 
     The grid runs each solve on all cores, where a run of the smallest problem is as much
     thread start-up as work; the cost per cell is a cost of work, so its growth is also measured
-    with `--threads 1`, the two ends of each manifold alternated `runs` times."""
+    with `--threads 1`, the two ends of each manifold alternated `runs` times on one core."""
     ends = {}
     for r in rows:
         ends.setdefault(r["problem"].rsplit("-n", 1)[0], []).append(r)
@@ -117,8 +149,9 @@ def one_thread(ndc, problems, rows, runs):
         samples = {r["problem"]: [] for r in pair}
         for _ in range(runs):
             for r in pair:
-                _, text = run([ndc, "solve", os.path.join(problems, r["problem"] + ".toml"),
-                               "--depth", r["depth"], "--threads", "1", "--json"])
+                _, text = run(pinned(cores, [ndc, "solve",
+                                             os.path.join(problems, r["problem"] + ".toml"),
+                                             "--depth", r["depth"], "--threads", "1", "--json"]))
                 summary = json.loads(text)
                 samples[r["problem"]].append((summary["timing_s"]["total"],
                                               max(1, summary["cells"]["solution"]),
@@ -129,7 +162,8 @@ def one_thread(ndc, problems, rows, runs):
         ratios = sorted((b[0] / b[1]) / (a[0] / a[1]) for a, b in zip(first, last))
         n0, n1 = int(pair[0]["n"]), int(pair[1]["n"])
         notes.append(f"{generator}, one thread (`solve FILE --depth {pair[0]['depth']} "
-                     f"--threads 1 --json`, R^{n0} and R^{n1} alternated {runs} time(s)): "
+                     f"--threads 1 --json`, R^{n0} and R^{n1} alternated {runs} time(s)"
+                     f"{'' if cores is None else f' on cpu{cores[1]}'}): "
                      f"{per(last, 1) / per(first, 1):.1f}x per solution cell "
                      f"({1e6 * per(first, 1):.1f} -> {1e6 * per(last, 1):.1f} µs; the pairs' "
                      f"ratios {ratios[0]:.1f}-{ratios[-1]:.1f}x) and "
@@ -139,42 +173,45 @@ def one_thread(ndc, problems, rows, runs):
     return notes
 
 
-def threads(ndc, workdir, quick, repeats):
-    """Thread speedup rows, or None when solve has no --threads."""
+def threads(ndc, workdir, quick, repeats, cores):
+    """Thread speedup rows, or None when solve has no --threads. The one-thread runs are pinned
+    to the fastest core; *ceiling* is the speedup the cores' speeds allow."""
     help_text = subprocess.run([ndc, "solve", "--help"], capture_output=True, text=True).stdout
     if "--threads" not in help_text:
         return None
-    cores = os.cpu_count() or 1
+    count = os.cpu_count() or 1
+    ceiling = f"{count:.2f}" if cores is None else f"{sum(cores[0].values()):.2f}"
     cases = [("experiments/problems/torus.toml", 4 if quick else 7),
              ("experiments/problems/torus-r6.toml", 3 if quick else 5)]
     lines = ["| problem | depth | threads | pairs | median s | spread s | speedup | "
-             "pair speedup | meshes identical |", "|---|---|---|---|---|---|---|---|---|"]
+             "pair speedup | meshes identical | ceiling |", "|---|---|---|---|---|---|---|---|---|---|"]
     # At least 7 pairs: a two-thread run on a 2-core machine loses a whole core whenever another
     # process runs, and single runs spread by 15%; the median of the pairs' ratios (1 thread /
     # N threads, each pair run back to back) is robust to the machine's drift.
     pairs = repeats if quick else max(repeats, 7)
     for file, depth in cases:
-        times = {1: [], cores: []}
+        times = {1: [], count: []}
         outs = {}
         for _ in range(pairs):  # interleaved: 1, N, 1, N ..
-            for t in (1, cores):
+            for t in (1, count):
                 out = os.path.join(workdir, f"threads-{t}")
                 shutil.rmtree(out, ignore_errors=True)
-                seconds, _ = run([ndc, "solve", os.path.join(ROOT, file), "--depth", str(depth),
-                                  "--threads", str(t), "--out", out])
+                cmd = [ndc, "solve", os.path.join(ROOT, file), "--depth", str(depth),
+                       "--threads", str(t), "--out", out]
+                seconds, _ = run(pinned(cores, cmd) if t == 1 else cmd)
                 times[t].append(seconds)
                 outs[t] = os.path.join(out, "mesh.ply")
-        same = filecmp.cmp(outs[1], outs[cores], shallow=False)
+        same = filecmp.cmp(outs[1], outs[count], shallow=False)
         m1 = statistics.median(times[1])
-        ratios = [a / b for a, b in zip(times[1], times[cores])]
-        for t in (1, cores):
+        ratios = [a / b for a, b in zip(times[1], times[count])]
+        for t in (1, count):
             m = statistics.median(times[t])
-            paired = statistics.median(ratios) if t == cores else 1.0
+            paired = statistics.median(ratios) if t == count else 1.0
             lines.append(f"| {os.path.basename(file)} | {depth} | {t} | {pairs} | {m:.3g} | "
                          f"{spread(times[t])} | {m1 / m:.2f} | {paired:.2f} | "
-                         f"{'yes' if same else 'NO'} |")
+                         f"{'yes' if same else 'NO'} | {ceiling if t == count else '1.00'} |")
         print(f"[threads] {file} depth {depth}: {m1:.3g} s / "
-              f"{statistics.median(times[cores]):.3g} s", file=sys.stderr, flush=True)
+              f"{statistics.median(times[count]):.3g} s", file=sys.stderr, flush=True)
     return lines
 
 
@@ -220,9 +257,10 @@ def main(argv):
     load_start = open("/proc/loadavg").read().split()[:3]
     started = datetime.datetime.now(datetime.timezone.utc)
     try:
+        cores = core_speeds(ndc, args.quick)
         command, cell_lines, notes = per_cell(ndc, os.path.join(workdir, "per-cell"), args.quick,
-                                              cell_runs)
-        thread_lines = threads(ndc, workdir, args.quick, repeats)
+                                              cell_runs, cores)
+        thread_lines = threads(ndc, workdir, args.quick, repeats, cores)
         write_lines = writing(ndc, workdir, args.quick, repeats)
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
@@ -233,7 +271,13 @@ def main(argv):
              f"Measured {started:%Y-%m-%d %H:%M} UTC by `{cmdline}` (run by `bench/run.sh`) on "
              f"{os.cpu_count()} cores, commit {commit}; load average {' '.join(load_start)} at "
              f"the start and {' '.join(load_end)} at the end; {repeats} interleaved run(s) per "
-             "timed command (the thread rows: their pairs).", "",
+             "timed command (the thread rows: their pairs)" + (
+                 "." if cores is None else
+                 "; the cores' speeds (`solve experiments/problems/torus.toml --depth "
+                 f"{4 if args.quick else 6} --threads 1` pinned to each with taskset, the "
+                 f"smallest of {1 if args.quick else 3}, against the fastest): " +
+                 ", ".join(f"cpu{c} {v:.2f}" for c, v in cores[0].items()) +
+                 f"; one-thread runs are pinned to cpu{cores[1]}."), "",
              f"**Cost per solution cell against n** (`ndcontour {command}`, run {cell_runs} "
              "time(s); the "
              "median total and stage times per solution cell, the runs' range in brackets; *before*: the figures issue 14 was filed with, before the "
@@ -245,7 +289,8 @@ def main(argv):
         lines += ["**Thread speedup** (`ndcontour solve FILE --depth L --threads T --out DIR`, "
                   "whole processes, one thread and all cores alternated; *speedup*: the ratio "
                   "of the medians, *pair speedup*: the median of the pairs' ratios; the meshes "
-                  "of the two thread counts compared byte for byte):", ""] + thread_lines + [""]
+                  "of the two thread counts compared byte for byte; *ceiling*: the speedup the "
+                  "cores' speeds allow, their sum against the fastest):", ""] + thread_lines + [""]
     lines += ["**Output writing** (`solve --out DIR` against `solve --json`, which writes no "
               "file; *extra* is wall - timing_s.total, writing the difference of the two; "
               "medians of at least 5 pairs, the --out extras' range in brackets):", "",

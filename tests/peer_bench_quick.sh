@@ -21,6 +21,8 @@ grep -q '^| circle-r8 | gudhi |' <<<"$section" || { echo "no circle-r8 run" >&2;
 own=$(sed -n '/<!-- self-bench:begin -->/,/<!-- self-bench:end -->/p' "$scratch/performance.md")
 grep -q '^| rotated-sphere | 4 | 3 |' <<<"$own" || { echo "no per-cell row for the sphere in R^4" >&2; exit 1; }
 grep -q '^| torus | 5 |' <<<"$own" || { echo "no output-writing row" >&2; exit 1; }
-grep -q '^| torus.toml | 4 | [0-9]* | [0-9]* | [0-9.]* |' <<<"$own" ||
+grep -q '^- rotated-sphere, one thread .*x per solution cell' <<<"$own" ||
+  { echo "no one-thread growth of the sphere's cost per cell" >&2; exit 1; }
+grep -q '^| torus.toml | 4 | [0-9]* | [0-9]* | [0-9.]* | .* | [0-9.]* |$' <<<"$own" ||
   { echo "no thread-speedup row" >&2; exit 1; }
 echo "peer-bench-quick: $rows matched torus row(s); own tables written"
