@@ -4,10 +4,10 @@
 //
 // A certificate is a claim about the answer, so every test here is built to catch a false one:
 //  - Thin features (genus2, thin-torus, two-spheres-close, flat-top-torus, curve-pair-close in
-//    experiments/problems/) at a base depth where the uniform grid is too coarse: with the
-//    default refinement limit the run must be certified and right (components, Euler
-//    characteristic, no non-manifold or boundary edge); with refinement off (maxDepth = depth)
-//    it may fail, but if it says certified it must be right.
+//    experiments/problems/), and the R^6 torus on a coarse grid, at a base depth where the
+//    uniform grid is too coarse: with the default refinement limit the run must be certified
+//    and right (components, Euler characteristic, no non-manifold or boundary edge); with
+//    refinement off (maxDepth = depth) it may fail, but if it says certified it must be right.
 //  - A falsification corpus: seeded random similarity embeddings (rotation, scaling, offset)
 //    of circles, 2-spheres, ellipsoids, ring tori and Clifford tori in R^3..R^7, on boxes not
 //    aligned to them. Every certified run must be right; false certificates must be 0; the
@@ -239,6 +239,11 @@ const std::vector<ThinCase> kThinCases = {
     // The curves pass 0.001 apart, 1/14 of an x cell at depth 8 (curves are cheap there); the
     // first grid plane between them is at level 11, within the default limit (depth + 4).
     {"curve-pair-close", 8, {2, 0, 0}, false},
+    // A coarse grid in R^6: 1,704 of the base cells fail, and one round of refinement makes 2^6
+    // children of each (109,056 leaves), which the leaves' budget must allow (2^(n-k) per
+    // solution leaf; at 2 per solution leaf, 65,920, nothing was refined and 4 edges were
+    // non-manifold).
+    {"torus-r6", 3, {1, 0, 0}, false},
 };
 
 }  // namespace

@@ -502,14 +502,18 @@ class AdaptiveCrossing {
   /// vertices) it bounds the cost. A leaf costs more as n grows, so the floor shrinks by 16 per
   /// dimension, to 4096 from R^4 on. The children the bounding excludes cost one bounding test
   /// each, but a refinement makes 2^n of them (a curve in R^7: 128 per refined cell, about 2 of
-  /// them solution leaves), so they get their own, wider budget: 2 times the first, at most
-  /// 2^22 leaves (memory). A chord error the user asks for (--tolerance) may need many more
-  /// solution leaves: up to 2^22 (a few hundred MB); the CLI warns when it is not reached.
+  /// them solution leaves), so they get their own, wider budget: 2^(n-k) times the first (the
+  /// children that come with each solution child; at least 2 times), at most 2^22 leaves
+  /// (memory). A chord error the user asks for (--tolerance) may need many more solution
+  /// leaves: up to 2^22 (a few hundred MB); the CLI warns when it is not reached.
   void setBudget(std::size_t baseCells, bool tolerance) {
     maxSolutionLeaves_ = std::max<std::size_t>(
         16 * baseCells, std::size_t{1} << std::max(12, 16 - 4 * (grid_.n - 3)));
     if (tolerance) maxSolutionLeaves_ = std::max<std::size_t>(maxSolutionLeaves_, kMaxLeaves);
-    maxLeaves_ = std::min<std::size_t>(2 * maxSolutionLeaves_, kMaxLeaves);
+    const std::size_t perSolutionChild = std::size_t{1} << std::max(1, n_ - k_);
+    maxLeaves_ = maxSolutionLeaves_ >= kMaxLeaves / perSolutionChild
+                     ? kMaxLeaves
+                     : perSolutionChild * maxSolutionLeaves_;
   }
 
   /// Whether refining `refine` leaves stays within the budget: the leaves it adds at most, and
