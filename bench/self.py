@@ -10,7 +10,8 @@ bench/run.sh after the peer benchmark:
    depth 5 with one thread and with all cores, interleaved (at least 7 pairs), medians, spreads
    and the median of the pairs' ratios; the meshes of the two thread counts are compared byte
    for byte. Each pair runs the one-thread solve pinned to every core (up to 8) and keeps the
-   fastest; the cores' speeds in the pair bound its speedup (the *ceiling* column).
+   fastest, and one one-thread solve per core all at once: their throughput bounds the
+   pair's speedup (the *ceiling* column).
 3. Output writing: the torus at depth 8 with `--out` (binary PLY) against `--json` (no files);
    writing is (wall - timing_s.total) of the first minus the same of the second.
 
@@ -20,6 +21,7 @@ the markers are missing). No time is asserted anywhere.
 """
 
 import argparse
+import concurrent.futures
 import csv
 import datetime
 import filecmp
@@ -173,14 +175,26 @@ def one_thread(ndc, problems, rows, runs, cores):
     return notes
 
 
+def together(ndc, file, depth, cores):
+    """The throughput of one-thread solves run at once, one pinned to each core, in solves per
+    second: what the cores give together when all of them are busy (a virtual machine's cores
+    can share a physical core, or its memory bandwidth, with each other)."""
+    cmd = [ndc, "solve", os.path.join(ROOT, file), "--depth", str(depth), "--threads", "1",
+           "--json"]
+    with concurrent.futures.ThreadPoolExecutor(len(cores[0])) as pool:
+        walls = list(pool.map(lambda c: run(["taskset", "-c", str(c)] + cmd)[0], cores[0]))
+    return sum(1 / w for w in walls)
+
+
 def threads(ndc, workdir, quick, repeats, cores):
     """Thread speedup rows, or None when solve has no --threads.
 
     Each pair runs the problem with all cores and, pinned, with one thread on each core (on
     up to 8 cores; beyond, on the fastest core of core_speeds only): the pair's one-thread time
-    is its fastest core's, and its *ceiling*, the speedup its cores allow, is the sum of the
-    cores' speeds against that one. Core speeds on a virtual machine drift within minutes, so
-    the ceiling is measured in the same pair as the speedup."""
+    is its fastest core's. Its *ceiling*, the speedup its cores allow, is the throughput of one
+    one-thread solve per core run at once against that time: on a virtual machine the cores
+    can slow each other down when all are busy, and their speeds drift within minutes, so the
+    ceiling is measured in the same pair as the speedup."""
     help_text = subprocess.run([ndc, "solve", "--help"], capture_output=True, text=True).stdout
     if "--threads" not in help_text:
         return None
@@ -216,9 +230,9 @@ def threads(ndc, workdir, quick, repeats, cores):
         for _ in range(pairs):  # interleaved: the single cores, all cores, ..
             single = [solve(1, core) for core in (singles if count > 1 else [None])]
             times[1].append(min(single))
-            ceilings.append(sum(min(single) / x for x in single) if len(single) > 1 else
-                            (sum(cores[0].values()) if cores else float(count)))
             times[count].append(solve(count, None))
+            ceilings.append(min(single) * together(ndc, file, depth, cores) if cores else
+                            float(count))
         same = filecmp.cmp(outs[1], outs[count], shallow=False)
         m1 = statistics.median(times[1])
         ratios = [a / b for a, b in zip(times[1], times[count])]
@@ -312,8 +326,9 @@ def main(argv):
                   "of the medians, *pair speedup*: the median of the pairs' ratios; the meshes "
                   "of the two thread counts compared byte for byte; one thread: each pair runs "
                   "it pinned to every core and keeps the fastest; *ceiling*: the median over "
-                  "the pairs of the speedup the cores allow, their speeds' sum against the "
-                  "fastest's):", ""] + thread_lines + [""]
+                  "the pairs of the speedup the cores allow when all are busy, the throughput "
+                  "of one one-thread solve pinned to each core, all at once, against the "
+                  "fastest core's one-thread time):", ""] + thread_lines + [""]
     lines += ["**Output writing** (`solve --out DIR` against `solve --json`, which writes no "
               "file; *extra* is wall - timing_s.total, writing the difference of the two; "
               "medians of at least 5 pairs, the --out extras' range in brackets):", "",
