@@ -54,8 +54,9 @@ def core_speeds(ndc, quick):
     (the smallest of 3 runs), and the fastest core; None where the process cannot pin.
 
     A virtual machine's cores need not be equal (one of this project's 2-core machines ran the
-    same single-thread solve in 1.06 s on one core and 1.61 s on the other), so the one-thread
-    runs are pinned to the fastest core, and the thread rows' ceiling is the sum of the speeds."""
+    same single-thread solve in 1.06 s on one core and 1.61 s on the other), so the per-cell
+    one-thread runs are pinned to the fastest core (the thread rows measure their cores in each
+    pair: threads())."""
     if not hasattr(os, "sched_getaffinity") or not shutil.which("taskset"):
         return None
     cores = sorted(os.sched_getaffinity(0))
