@@ -229,7 +229,7 @@ def threads(ndc, workdir, quick, repeats, cores):
             return seconds
 
         for _ in range(pairs):  # interleaved: the single cores, all cores, ..
-            single = [solve(1, core) for core in (singles if count > 1 else [None])]
+            single = [solve(1, core) for core in singles]
             times[1].append(min(single))
             times[count].append(solve(count, None))
             ceilings.append(min(single) * together(ndc, file, depth, cores) if cores else
