@@ -25,48 +25,16 @@
 #include "framework/core/parallel.hpp"
 #include "strategies/connection/cell_tree.hpp"
 #include "strategies/connection/certificate.hpp"
+#include "strategies/connection/dual_complex.hpp"
+#include "strategies/connection/dual_polygon.hpp"
 #include "strategies/connection/face_solver.hpp"
+#include "strategies/connection/jacobian_work.hpp"
 #include "strategies/connection/leaf_model.hpp"
 
 namespace ndc {
 namespace {
 
 using namespace crossing_detail;
-
-/// The Jacobian at a point and its factorizations, in per-thread storage (threadScratch).
-template <class S>
-struct JacobianWork {
-  std::vector<S> f, j;
-  Matrix<S> full, square, gram;
-  Eigen::FullPivLU<Matrix<S>> lu;
-  Eigen::JacobiSVD<Matrix<S>> svd;
-  Eigen::LLT<Matrix<S>> llt;
-
-  /// The m x n Jacobian of the system at x, into `full`.
-  const Matrix<S>& jacobianAt(const System<S>& system, std::span<const S> x) {
-    const int m = system.m(), n = system.n();
-    f.resize(m), j.resize(std::size_t(m) * n);
-    system.evaluate(x, f, j);
-    full.resize(m, n);
-    for (int r = 0; r < m; ++r) {
-      for (int c = 0; c < n; ++c) full(r, c) = j[std::size_t(r) * n + c];
-    }
-    return full;
-  }
-
-  /// Singular values of `full`, largest first.
-  const Vector<S>& singularValues() { return svd.compute(full).singularValues(); }
-
-  /// Whether sigma_min(full) > ratio sigma_max(full) clearly: a Cholesky factorization of
-  /// J J^T - t I with t = 2 ratio^2 trace(J J^T) >= 2 ratio^2 sigma_max^2 exists, so
-  /// sigma_min^2 > t. A tenth of the singular values' cost; false says nothing.
-  bool clearlyRegular(const S& ratio) {
-    gram.noalias() = full * full.transpose();
-    const S t = 2 * ratio * ratio * gram.trace();
-    gram.diagonal().array() -= t;
-    return t > 0 && llt.compute(gram).info() == Eigen::Success;
-  }
-};
 
 /// The local degree of F on a face from its roots: the sum of the signs of the face Jacobian's
 /// determinant (columns of the free axes). A piece of M that dips through the face and back
@@ -190,62 +158,6 @@ struct GeneralPosition {
   std::vector<S> scale;  ///< kRelative * cell width * gradient scale, per equation
   S slack;               ///< crossings kept this far outside the domain
   S tolerance;           ///< a root this close to a face boundary is degenerate
-};
-
-/// Union-find over small integer sets (the link of one vertex).
-struct UnionFind {
-  std::vector<int> parent;
-  int find(int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  }
-  void unite(int a, int b) { parent[find(a)] = find(b); }
-};
-
-/// A crossed minimal m-face of the tree (docs/certificate.md): the leaves around it in cyclic
-/// order (k = 2; a coarser leaf that fills two of the four quadrants appears once, so the
-/// polygon is a triangle), or the two leaves across it (k = 1). A node is a leaf number, or
-/// -1 - tag for a region beyond the domain (such a polygon only enters the certificate).
-struct Polygon {
-  std::array<std::int64_t, 4> node{-1, -1, -1, -1};
-  int size = 0;
-  std::int32_t root = -1;  ///< its crossing, in the root list
-  bool outside = false;    ///< a node lies beyond the domain: not a cell of the mesh
-};
-
-/// The polygons at each node (leaf) of a polygon list, in polygon order, as one array: the
-/// polygons of leaf c are polygons_[first_[c], first_[c + 1]). Built by counting, so it costs
-/// two passes and no vector per leaf.
-class Incidence {
- public:
-  /// Over `leaves` leaves; `mesh`: only the polygons that are cells of the mesh (not outside).
-  Incidence(const std::vector<Polygon>& polygons, std::size_t leaves, bool mesh) {
-    const auto counted = [&](const Polygon& poly, int i) {
-      return poly.node[i] >= 0 && !(mesh && poly.outside);
-    };
-    first_.assign(leaves + 1, 0);
-    for (const Polygon& poly : polygons) {
-      for (int i = 0; i < poly.size; ++i)
-        if (counted(poly, i)) ++first_[std::size_t(poly.node[i]) + 1];
-    }
-    for (std::size_t c = 0; c < leaves; ++c) first_[c + 1] += first_[c];
-    polygons_.resize(first_.back());
-    std::vector<std::size_t> at(first_.begin(), first_.end() - 1);
-    for (std::size_t p = 0; p < polygons.size(); ++p) {
-      for (int i = 0; i < polygons[p].size; ++i)
-        if (counted(polygons[p], i))
-          polygons_[at[std::size_t(polygons[p].node[i])]++] = static_cast<std::int32_t>(p);
-    }
-  }
-
-  /// The polygons at leaf c.
-  std::span<const std::int32_t> operator[](std::size_t c) const {
-    return std::span<const std::int32_t>(polygons_).subspan(first_[c], first_[c + 1] - first_[c]);
-  }
-
- private:
-  std::vector<std::size_t> first_;
-  std::vector<std::int32_t> polygons_;
 };
 
 /// Where a minimal m-face lies: its level, the index of its lower corner there and its k fixed
@@ -1571,7 +1483,7 @@ class AdaptiveCrossing {
 
   /// The certificate of every active leaf (docs/certificate.md) into failure_.
   void certify() {
-    const Incidence incident(polygons_, tree_.size(), false);
+    const Incidence incident(polygons_, tree_.size());
     std::fill(failure_.begin(), failure_.end(), Failure::kNone);
     std::vector<std::int32_t> leaves;
     for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
@@ -1603,7 +1515,7 @@ class AdaptiveCrossing {
       failure_[c] = Failure::kGraph;
     } else if (k_ == 2 && !facesGraph(c, rf, t)) {
       failure_[c] = Failure::kFaceGraph;
-    } else if (!simpleLink(c, polygons_, ps)) {
+    } else if (!simpleLink(k_, c, polygons_, ps)) {
       failure_[c] = Failure::kLink;
     }
   }
@@ -1841,7 +1753,7 @@ class AdaptiveCrossing {
       ps.push_back(static_cast<std::int32_t>(link.size()));
       link.push_back(q);
     }
-    return simpleLink(front, link, ps);
+    return simpleLink(k_, front, link, ps);
   }
 
   /// The polygons incident to any of the leaves, once each.
@@ -1941,7 +1853,7 @@ class AdaptiveCrossing {
     std::vector<Polygon> link;
     std::vector<std::int32_t> ps;
     if (!tentative &&
-        (!blockLink(members, incident, link, ps) || !simpleLink(members.front(), link, ps)))
+        (!blockLink(members, incident, link, ps) || !simpleLink(k_, members.front(), link, ps)))
       return false;
     // The graph tests on the block's box.
     std::vector<std::int32_t> hi(lo);
@@ -2049,52 +1961,6 @@ class AdaptiveCrossing {
       if (q.size >= (k_ == 1 ? 2 : 3)) kept.push_back(q);
     }
     polygons_ = std::move(kept);
-  }
-
-  /// The link of leaf c (k = 2): one edge per polygon, between the polygon's two nodes next to
-  /// c; `nodes` receives the distinct neighbour nodes the edges number.
-  static std::vector<std::array<int, 2>> linkEdges(std::int64_t c,
-                                                   const std::vector<Polygon>& polygons,
-                                                   std::span<const std::int32_t> ps,
-                                                   std::vector<std::int64_t>& nodes) {
-    std::vector<std::array<int, 2>> edges;
-    for (std::int32_t p : ps) {
-      const Polygon& poly = polygons[p];
-      int at = 0;
-      while (poly.node[at] != c) ++at;
-      std::array<int, 2> e{};
-      for (int s = 0; s < 2; ++s) {
-        const std::int64_t node = poly.node[(at + (s ? poly.size - 1 : 1)) % poly.size];
-        auto it = std::find(nodes.begin(), nodes.end(), node);
-        e[s] = static_cast<int>(it - nodes.begin());
-        if (it == nodes.end()) nodes.push_back(node);
-      }
-      edges.push_back(e);
-    }
-    return edges;
-  }
-
-  /// Whether the crossings on the boundary of leaf c form one simple piece: none, or two
-  /// (k = 1), or one cycle through every neighbour region exactly twice (k = 2; the regions
-  /// beyond the domain are nodes too, so a surface with boundary closes its loop there).
-  bool simpleLink(std::int64_t c, const std::vector<Polygon>& polygons,
-                  std::span<const std::int32_t> ps) const {
-    if (ps.empty()) return true;
-    if (k_ == 1) return ps.size() == 2;
-    std::vector<std::int64_t> nodes;
-    const std::vector<std::array<int, 2>> edges = linkEdges(c, polygons, ps, nodes);
-    UnionFind uf{std::vector<int>(nodes.size())};
-    std::iota(uf.parent.begin(), uf.parent.end(), 0);
-    std::vector<int> degree(nodes.size(), 0);
-    for (const auto& e : edges) {
-      uf.unite(e[0], e[1]);
-      ++degree[e[0]];
-      ++degree[e[1]];
-    }
-    for (std::size_t i = 0; i < nodes.size(); ++i) {
-      if (degree[i] != 2 || uf.find(int(i)) != uf.find(0)) return false;
-    }
-    return true;
   }
 
   /// Crossings, certificates and refinement until every leaf is certified or at the maximum
@@ -2288,218 +2154,11 @@ class AdaptiveCrossing {
     t.certified = t.reason.empty();
   }
 
-  /// The dual complex of the final tree (docs/crossing.md, steps 3 and 4), on the polygons
-  /// that lie inside the domain.
+  /// The dual complex of the final tree (docs/crossing.md, steps 3 and 4, and "The domain's
+  /// boundary"), blocks merged where every leaf is certified.
   void buildComplex(ConnectionOutput<S>& out) {
     collapseBlocks(out.topology.certified);
-    const std::size_t count = tree_.size();
-    std::vector<std::int32_t> mesh;
-    for (std::size_t p = 0; p < polygons_.size(); ++p) {
-      if (!polygons_[p].outside) mesh.push_back(static_cast<std::int32_t>(p));
-    }
-    const Incidence incident(polygons_, count, true);
-    const auto slotOf = [&](std::int32_t p, std::size_t c) {
-      int at = 0;
-      while (polygons_[p].node[at] != static_cast<std::int64_t>(c)) ++at;
-      return at;
-    };
-    // piece[p * 4 + i]: the piece of M in leaf node[i] that polygon p belongs to.
-    std::vector<std::int32_t> piece(polygons_.size() * 4, 0), pieceCount(count, 0);
-    // Each leaf writes its own slots of piece (its position in each incident polygon).
-    std::vector<std::uint8_t> ambiguous(count, 0);
-    parallelFor(count, [&](std::size_t c) {
-      pieceCount[c] = pieces(c, incident[c], piece, slotOf, ambiguous[c]);
-    });
-    for (std::uint8_t a : ambiguous) out.ambiguousCells += a;
-    // Dual vertices: the Newton projection of the mean of each piece's crossings, written
-    // into the complex in leaf and piece order.
-    const std::size_t base = out.complex.vertexCount();
-    const std::vector<DualVertex> vertices =
-        dualVertices(incident, piece, pieceCount, slotOf, out.complex);
-    std::vector<std::int32_t> firstVertex(count, -1);
-    for (std::size_t i = 0; i < vertices.size(); ++i) {
-      const DualVertex& d = vertices[i];
-      if (!d.converged) ++out.offManifoldVertices;  // reported, never written silently off M
-      if (d.piece == 0) firstVertex[d.leaf] = static_cast<std::int32_t>(base + i);
-      if (d.piece == 0 && (singular_[d.leaf] || d.singular)) ++out.singularCells;
-    }
-    addSimplices(mesh, firstVertex, piece, out.complex);
-  }
-
-  /// A dual vertex: piece `piece` of M in leaf `leaf` (its point is in the complex).
-  struct DualVertex {
-    std::int32_t leaf = 0;
-    std::int32_t piece = 0;
-    bool converged = false;  ///< whether the projection converged
-    bool singular = false;   ///< the Jacobian at the point is (nearly) rank-deficient
-  };
-
-  /// The dual vertices in leaf and piece order, appended to `complex`: the mean of each piece's
-  /// crossings (summed in the order of the leaf's polygons) projected onto M, or that mean
-  /// where Newton fails; each leaf's in parallel into its own slots.
-  template <class SlotOf>
-  std::vector<DualVertex> dualVertices(const Incidence& incident,
-                                       const std::vector<std::int32_t>& piece,
-                                       const std::vector<std::int32_t>& pieceCount,
-                                       const SlotOf& slotOf, Complex<S>& complex) const {
-    std::vector<std::size_t> first(pieceCount.size() + 1, complex.vertexCount());
-    for (std::size_t c = 0; c < pieceCount.size(); ++c)
-      first[c + 1] = first[c] + std::size_t(pieceCount[c]);
-    complex.vertices.resize(first.back() * n_);
-    complex.vertexCell.resize(first.back(), -1);
-    std::vector<DualVertex> out(first.back() - first.front());
-    parallelFor(pieceCount.size(), [&](std::size_t c) {
-      if (pieceCount[c] == 0) return;
-      std::vector<S> sums(std::size_t(pieceCount[c]) * n_, S(0));
-      std::vector<std::int32_t> counts(pieceCount[c], 0);
-      for (std::int32_t p : incident[c]) {
-        const std::int32_t q = piece[p * 4 + slotOf(p, c)];
-        for (int j = 0; j < n_; ++j)
-          sums[std::size_t(q) * n_ + j] += rootPoints_[std::size_t(polygons_[p].root) * n_ + j];
-        ++counts[q];
-      }
-      const auto cell = tree_.baseCell(static_cast<std::int32_t>(c));
-      for (int q = 0; q < pieceCount[c]; ++q) {
-        const std::size_t v = first[c] + std::size_t(q);
-        DualVertex& d = out[v - first.front()];
-        d.leaf = static_cast<std::int32_t>(c);
-        d.piece = q;
-        const std::span<S> x(complex.vertices.data() + v * n_, std::size_t(n_));
-        for (int j = 0; j < n_; ++j) x[j] = sums[std::size_t(q) * n_ + j] / counts[q];
-        complex.vertexCell[v] = cell;
-        projectVertex(d, x);
-      }
-    });
-    return out;
-  }
-
-  /// Projects a dual vertex onto M (keeping the mean where Newton fails) and tests whether
-  /// its cell is singular: the Jacobian at the vertex (nearly) rank-deficient relative to the
-  /// cell size, as at self-intersections and cone points.
-  void projectVertex(DualVertex& d, std::span<S> x) const {
-    const std::vector<S> mean(x.begin(), x.end());
-    d.converged = in_.project(x).converged;
-    if (!d.converged) std::copy(mean.begin(), mean.end(), x.begin());
-    if (d.piece != 0) return;
-    const S width = S(tree_.grid(tree_.level(d.leaf)).cellWidth(0));
-    std::optional<JacobianWork<S>> fresh;
-    JacobianWork<S>& w = threadScratch<S, JacobianWork<S>>(fresh);
-    w.jacobianAt(in_.system, std::span<const S>(x));
-    // Most vertices are far from singular: a Cholesky test settles those.
-    const S ratio = width * 1e-3;
-    if (w.clearlyRegular(ratio)) {
-      d.singular = false;
-      return;
-    }
-    const Vector<S>& sigma = w.singularValues();
-    d.singular = sigma(0) == 0 || sigma(m_ - 1) <= sigma(0) * ratio;
-  }
-
-  /// The pieces of M in leaf c: for k = 2 the components of the link of its vertex (one edge
-  /// per incident polygon, between the polygon's two nodes next to c), one per sheet of M in
-  /// the leaf; for k = 1 one. `ambiguous`: set when the piece is not simple.
-  template <class SlotOf>
-  std::int32_t pieces(std::size_t c, std::span<const std::int32_t> ps,
-                      std::vector<std::int32_t>& piece, const SlotOf& slotOf,
-                      std::uint8_t& ambiguous) const {
-    if (ps.empty()) return 0;
-    const bool boundary = onDomainBoundary(static_cast<std::int32_t>(c));
-    if (k_ == 1) {
-      for (std::int32_t p : ps) piece[p * 4 + slotOf(p, c)] = 0;
-      if (ps.size() != 2 && !(boundary && ps.size() == 1)) ambiguous = 1;
-      return 1;
-    }
-    std::vector<std::int64_t> nodes;
-    const std::vector<std::array<int, 2>> edges =
-        linkEdges(static_cast<std::int64_t>(c), polygons_, ps, nodes);
-    UnionFind uf{std::vector<int>(nodes.size())};
-    std::iota(uf.parent.begin(), uf.parent.end(), 0);
-    for (const auto& e : edges) uf.unite(e[0], e[1]);
-    std::vector<int> componentOf(nodes.size(), -1), degree(nodes.size(), 0);
-    int components = 0;
-    for (std::size_t i = 0; i < nodes.size(); ++i) {
-      const int r = uf.find(static_cast<int>(i));
-      if (componentOf[r] < 0) componentOf[r] = components++;
-    }
-    for (const auto& e : edges) ++degree[e[0]], ++degree[e[1]];
-    for (std::size_t q = 0; q < ps.size(); ++q)
-      piece[ps[q] * 4 + slotOf(ps[q], c)] = componentOf[uf.find(edges[q][0])];
-    // One simple piece: one component that is a cycle (or a path on the domain boundary).
-    int ends = 0;
-    bool simple = components == 1;
-    for (int d : degree) {
-      if (d == 1) ++ends;
-      simple = simple && d <= 2;
-    }
-    simple = simple && (ends == 0 || (boundary && ends == 2));
-    if (!simple) ambiguous = 1;
-    return components;
-  }
-
-  /// Whether leaf c (or a leaf of its block) touches the domain boundary.
-  bool onDomainBoundary(std::int32_t c) const {
-    const auto touches = [&](std::int32_t leaf) {
-      const auto ci = tree_.index(leaf);
-      const std::int64_t top = tree_.grid(tree_.level(leaf)).cellsPerAxis();
-      return std::any_of(ci.begin(), ci.end(),
-                         [&](std::int32_t i) { return i == 0 || i + 1 == top; });
-    };
-    if (c < static_cast<std::int32_t>(block_.size()) && block_[c] >= 0) {
-      const auto& members = blocks_[block_[c]];
-      return std::any_of(members.begin(), members.end(), touches);
-    }
-    return touches(c);
-  }
-
-  /// The simplices of the mesh polygons, appended to `complex` in their order, each polygon's
-  /// in parallel into its own slots.
-  void addSimplices(const std::vector<std::int32_t>& mesh, const std::vector<std::int32_t>& first,
-                    const std::vector<std::int32_t>& piece, Complex<S>& complex) const {
-    const auto width = static_cast<std::size_t>(k_ + 1);
-    std::vector<std::size_t> at(mesh.size() + 1, complex.simplices.size());
-    for (std::size_t i = 0; i < mesh.size(); ++i)
-      at[i + 1] = at[i] + width * simplicesOf(polygons_[mesh[i]]);
-    complex.simplices.resize(at.back());
-    parallelFor(
-        mesh.size(),
-        [&](std::size_t i) {
-          writeSimplices(polygons_[mesh[i]], mesh[i], first, piece, complex,
-                         complex.simplices.data() + at[i]);
-        },
-        1024);
-  }
-
-  /// How many simplices a mesh polygon gives: an edge (k = 1), a triangle, or a quad's two.
-  std::size_t simplicesOf(const Polygon& poly) const { return k_ == 1 || poly.size == 3 ? 1 : 2; }
-
-  /// The simplices of one mesh polygon into `slot`: an edge (k = 1), a triangle, or a quad split
-  /// along its shorter diagonal (between the complex's vertices).
-  void writeSimplices(const Polygon& poly, std::int32_t p, const std::vector<std::int32_t>& first,
-                      const std::vector<std::int32_t>& piece, const Complex<S>& complex,
-                      std::int32_t* slot) const {
-    std::array<std::int32_t, 4> v{};
-    for (int i = 0; i < poly.size; ++i) v[i] = first[poly.node[i]] + piece[p * 4 + i];
-    const auto put = [&slot](std::initializer_list<std::int32_t> simplex) {
-      for (std::int32_t u : simplex) *slot++ = u;
-    };
-    if (k_ == 1) return put({v[0], v[1]});
-    if (poly.size == 3) return put({v[0], v[1], v[2]});
-    const auto distance = [&](int a, int b) {
-      S sum = 0;
-      for (int j = 0; j < n_; ++j) {
-        const S diff = complex.vertices[std::size_t(v[a]) * n_ + j] -
-                       complex.vertices[std::size_t(v[b]) * n_ + j];
-        sum += diff * diff;
-      }
-      return sum;
-    };
-    if (distance(0, 2) <= distance(1, 3)) {
-      put({v[0], v[1], v[2]});
-      put({v[0], v[2], v[3]});
-    } else {
-      put({v[0], v[1], v[3]});
-      put({v[1], v[2], v[3]});
-    }
+    buildDualComplex(DualInput<S>{in_, tree_, domain_, polygons_, rootPoints_, singular_}, out);
   }
 
   const ConnectionInput<S>& in_;
