@@ -25,6 +25,7 @@
 #include "framework/core/parallel.hpp"
 #include "strategies/connection/cell_tree.hpp"
 #include "strategies/connection/certificate.hpp"
+#include "strategies/connection/domain_boundary.hpp"
 #include "strategies/connection/dual_complex.hpp"
 #include "strategies/connection/dual_polygon.hpp"
 #include "strategies/connection/face_solver.hpp"
@@ -331,7 +332,7 @@ class FaceStore {
 };
 
 /// Why a leaf is not certified (docs/certificate.md); the names go to uncertified.csv.
-enum class Failure : std::uint8_t { kNone, kCrossing, kGraph, kFaceGraph, kLink };
+enum class Failure : std::uint8_t { kNone, kCrossing, kGraph, kFaceGraph, kLink, kBoundary };
 
 const char* failureName(Failure f) {
   switch (f) {
@@ -343,6 +344,8 @@ const char* failureName(Failure f) {
       return "face-graph";
     case Failure::kLink:
       return "link";
+    case Failure::kBoundary:
+      return "domain-boundary";
     case Failure::kNone:
       break;
   }
@@ -1335,13 +1338,20 @@ class AdaptiveCrossing {
   /// The graph test of the box of `patches` (jacobian: scratch; test: graphTest_ or a copy).
   bool graphOf(const std::vector<Bernstein<S>>& patches, std::span<const S> margins,
                std::vector<Interval<S>>& jacobian, GraphTest<S>& test) const {
+    std::vector<int> axes(n_);
+    std::iota(axes.begin(), axes.end(), 0);
+    return hullGraph(patches, margins, axes, jacobian, test);
+  }
+
+  /// The graph test on the columns `axes` of J enclosed by the derivative hulls of `patches`.
+  bool hullGraph(const std::vector<Bernstein<S>>& patches, std::span<const S> margins,
+                 const std::vector<int>& axes, std::vector<Interval<S>>& jacobian,
+                 GraphTest<S>& test) const {
     jacobian.assign(std::size_t(m_) * n_, Interval<S>());
     for (int i = 0; i < m_; ++i) {
       for (int j = 0; j < n_; ++j)
         jacobian[std::size_t(i) * n_ + j] = derivativeHull(patches[i], j, margins[i]);
     }
-    std::vector<int> axes(n_);
-    std::iota(axes.begin(), axes.end(), 0);
     return test.graph(jacobian, axes);
   }
 
@@ -1358,6 +1368,20 @@ class AdaptiveCrossing {
       const S c = level_[i];
       const S lo = band ? std::min<S>(S(0), c) : c, hi = band ? std::max<S>(S(0), c) : c;
       if (m_ > 1 && (f.lower() > hi || f.upper() < lo)) return true;
+    }
+    return false;
+  }
+
+  /// Whether interval evaluation proves that no level set F = t c, t in [0, 1], meets `box`,
+  /// M itself included (for m = 1 too, where intervalEmpty's sign rule lets F = 0 pass).
+  bool levelsMiss(const Box<S>& box) const {
+    std::vector<Interval<S>> x;
+    for (int j = 0; j < n_; ++j) x.emplace_back(box.lo[j], box.hi[j]);
+    for (int i = 0; i < m_; ++i) {
+      const Interval<S> f =
+          in_.system.equations()[i].template evaluate<S>(std::span<const Interval<S>>(x));
+      const S c = level_.empty() ? S(0) : level_[i];
+      if (f.lower() > std::max<S>(S(0), c) || f.upper() < std::min<S>(S(0), c)) return true;
     }
     return false;
   }
@@ -1504,9 +1528,13 @@ class AdaptiveCrossing {
     LeafTests t{leafScratch(own), {}, graphTest_, false, -1, false, {}};
     if (empty_[c] == 1) {
       // M_c misses the leaf; M may not (it lies 1e-8 h away): where it meets the leaf, the
-      // isotopy from M to M_c needs the Jacobian's rank there.
-      if (!bandEmpty_[c] && !cellGraph(c, rf, t) && !intervalEmpty(leafBox(c), true))
+      // isotopy from M to M_c needs the Jacobian's rank there, and on the domain's boundary
+      // transversality to its faces.
+      const bool missed = bandEmpty_[c] || intervalEmpty(leafBox(c), true);
+      if (!missed && !cellGraph(c, rf, t))
         failure_[c] = Failure::kGraph;
+      else if (!boundaryTransverse(c, rf, t))
+        failure_[c] = Failure::kBoundary;
       return;
     }
     if (unproven_[c]) {
@@ -1517,7 +1545,41 @@ class AdaptiveCrossing {
       failure_[c] = Failure::kFaceGraph;
     } else if (!simpleLink(k_, c, polygons_, ps)) {
       failure_[c] = Failure::kLink;
+    } else if (!boundaryTransverse(c, rf, t)) {
+      failure_[c] = Failure::kBoundary;
     }
+  }
+
+  /// Whether every level set between M and M_c meets the domain's boundary transversally in
+  /// leaf c (docs/certificate.md, "The domain's boundary"): each face of the leaf's box in a
+  /// face of the domain of dimension n - j is missed by all of them (interval evaluation of
+  /// F - t c, t in [0, 1]), or, for j <= k, J's columns of its free axes have full rank m over
+  /// it (the graph test on those columns, whatever the level). A tangency of M with a domain
+  /// face, or M through a domain face of dimension below m, fails here.
+  bool boundaryTransverse(std::int32_t c, const RootForms& rf, LeafTests& t) {
+    std::vector<std::uint8_t> sides(n_, 0);
+    const std::int64_t top = tree_.grid(tree_.level(c)).cellsPerAxis();
+    bool touches = false;
+    for (int j = 0; j < n_; ++j) {
+      const std::int32_t i = tree_.index(c)[j];
+      sides[j] = std::uint8_t((i == 0 ? 1 : 0) | (i + 1 == top ? 2 : 0));
+      touches = touches || sides[j] != 0;
+    }
+    if (!touches) return true;
+    for (const DomainStratum<S>& face : domainStrata(leafBox(c), sides, k_ + 1)) {
+      if (levelsMiss(face.box)) continue;
+      if (static_cast<int>(face.fixed.size()) > k_) return false;
+      // J over the leaf holds J over the face; the face's own enclosure, then the Bernstein
+      // hulls, where that does not prove it.
+      if (byEvaluation_ && leafJacobian(c, t) && t.test.graph(t.whole, face.free)) continue;
+      bool excluded = false;
+      if (byEvaluation_ && evaluatedJacobian(face.box, t.jacobian, excluded) &&
+          t.test.graph(t.jacobian, face.free))
+        continue;
+      prepare(c, rf, t);
+      if (!hullGraph(t.patches, rf.margins, face.free, t.jacobian, t.test)) return false;
+    }
+    return true;
   }
 
   /// The leaf's patches into t (once).
@@ -1554,14 +1616,15 @@ class AdaptiveCrossing {
     block_.assign(tree_.size(), -1);
     unprovenOf_.resize(tree_.size());
     bandEmpty_.resize(tree_.size(), 0);
-    // The leaves that try blocks, with their root forms: a leaf whose own graph test fails
-    // does not (the graph test on a block around it would fail too, on a wider box with wider
-    // Jacobian enclosures; only refinement can help).
+    // The leaves that try blocks, with their root forms: not a leaf whose own graph test fails
+    // (the graph test on a block around it would fail too, on a wider box with wider Jacobian
+    // enclosures; only refinement can help), nor one M may touch the domain's boundary in
+    // (a block proves nothing there).
     std::vector<std::int32_t> trying;
     std::vector<const RootForms*> tryingForms;
     for (std::size_t i = 0; i < leaves.size(); ++i) {
       const Failure f = failure_[leaves[i]];
-      if (f == Failure::kNone || f == Failure::kGraph) continue;
+      if (f == Failure::kNone || f == Failure::kGraph || f == Failure::kBoundary) continue;
       trying.push_back(leaves[i]);
       tryingForms.push_back(forms[i]);
     }
@@ -1872,6 +1935,12 @@ class AdaptiveCrossing {
         if (!tentative || !subFacesGraph(level, lo, members, a, upper, rf, w)) return false;
       }
     }
+    // A block proves nothing about the domain's boundary: its members must each.
+    for (std::int32_t d : members) {
+      std::vector<Bernstein<S>> own;
+      LeafTests t{leafScratch(own), {}, graphTest_, false, -1, false, {}};
+      if (!boundaryTransverse(d, rf, t)) return false;
+    }
     // The members are taken (block_ >= 0 until mergeBlocks numbers the block).
     NewBlock b{c, level, tentative, lo, std::move(members), std::move(empties), {}};
     for (std::int32_t d : b.members) {
@@ -2142,6 +2211,10 @@ class AdaptiveCrossing {
       if (stuck > 0) {
         why << "; " << stuck << " next to crossings no refinement separates (M touches a grid "
             << "plane, or a singular point)";
+      }
+      if (reasons.count(failureName(Failure::kBoundary))) {
+        why << "; M may touch the domain's boundary (tangent to a face of the domain, or through "
+            << "a face of it of dimension below " << m_ << ")";
       }
       if (budgetSpent_) {
         why << "; refinement stopped at its budget of " << maxSolutionLeaves_

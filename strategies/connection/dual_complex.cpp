@@ -140,8 +140,8 @@ class DualComplex {
     for (std::size_t q = 0; q < ps.size(); ++q)
       piece_[ps[q] * 4 + slotOf(ps[q], c)] = componentOf[uf.find(edges[q][0])];
     // One simple piece: one component that is a cycle through every neighbour once.
-    const bool simple = components == 1 && std::all_of(degree.begin(), degree.end(),
-                                                        [](int d) { return d == 2; });
+    const bool simple =
+        components == 1 && std::all_of(degree.begin(), degree.end(), [](int d) { return d == 2; });
     if (!simple) ambiguous = 1;
     return components;
   }
@@ -252,9 +252,9 @@ class DualComplex {
                            std::uint64_t key) {
     const std::uint64_t axes = beyondAxes(key);
     const int axis = std::countr_zero(axes);
-    const std::uint64_t id = (static_cast<std::uint64_t>(leaf) << 24) ^
-                             (static_cast<std::uint64_t>(piece) << 8) ^
-                             static_cast<std::uint64_t>(2 * axis + ((key >> (2 * axis)) & 2 ? 1 : 0));
+    const std::uint64_t id =
+        (static_cast<std::uint64_t>(leaf) << 24) ^ (static_cast<std::uint64_t>(piece) << 8) ^
+        static_cast<std::uint64_t>(2 * axis + ((key >> (2 * axis)) & 2 ? 1 : 0));
     const auto [it, fresh] = facetVertex_.try_emplace(id, 0);
     if (fresh) {
       it->second = addBoundaryVertex(static_cast<std::int32_t>(leaf), key, poly.root);
@@ -362,7 +362,9 @@ class DualComplex {
     complex.simplices.resize(at.back());
     parallelFor(
         cycles.size(),
-        [&](std::size_t i) { writeSimplices(cycles[i], complex, complex.simplices.data() + at[i]); },
+        [&](std::size_t i) {
+          writeSimplices(cycles[i], complex, complex.simplices.data() + at[i]);
+        },
         1024);
   }
 
