@@ -1405,6 +1405,9 @@ struct TopologyCheck {
 struct ConnectionScore {
   std::string label;
   int runs = 0, withExpect = 0, components = 0, euler = 0, both = 0;
+  /// Runs with that value expected (the denominators), and runs of problems without any
+  /// expectation (not comparable: counted apart, never as wrong).
+  int withComponents = 0, withEuler = 0, withBoth = 0, notComparable = 0;
   double boundary = 0, nonmanifold = 0, openEnds = 0;
 };
 
@@ -1426,23 +1429,31 @@ std::vector<std::string> connectionScoreRow(const TopologyCheck& check, const Gr
       s.boundary += t.number(r, "mesh.boundary_edges");
       s.nonmanifold += t.number(r, "mesh.nonmanifold_edges");
     }
-    if (!check.hasExpect(r)) continue;
+    if (!check.hasExpect(r)) {
+      ++s.notComparable;
+      continue;
+    }
     ++s.withExpect;
+    // Each value over the runs that expect it: a problem that states only its components is
+    // not wrong about its Euler characteristic.
+    const bool hasC = std::isfinite(check.expected(r, "components"));
+    const bool hasE = std::isfinite(check.expected(r, "euler_characteristic"));
     const bool c = check.right(r, "components"), e = check.right(r, "euler_characteristic");
-    s.components += c;
-    s.euler += e;
-    s.both += c && e;
+    s.withComponents += hasC, s.components += hasC && c;
+    s.withEuler += hasE, s.euler += hasE && e;
+    s.withBoth += hasC && hasE, s.both += hasC && hasE && c && e;
   }
   const Stats chord = summarize(values(t, ok, "accuracy.max_chord_error"));
-  const auto share = [&](int count) {
-    return s.withExpect ? std::to_string(count) + "/" + std::to_string(s.withExpect) + " (" +
-                              formatFixed(100.0 * count / s.withExpect, 0) + "%)"
-                        : std::string(kDash);
+  const auto share = [&](int count, int of) {
+    return of ? std::to_string(count) + "/" + std::to_string(of) + " (" +
+                    formatFixed(100.0 * count / of, 0) + "%)"
+              : std::string(kDash);
   };
   std::vector<std::string> row = g.key;
   for (const std::string& cell :
-       {std::to_string(s.runs), std::to_string(failed), share(s.components), share(s.euler),
-        share(s.both), formatNumber(s.openEnds), formatNumber(s.boundary),
+       {std::to_string(s.runs), std::to_string(failed), std::to_string(s.notComparable),
+        share(s.components, s.withComponents), share(s.euler, s.withEuler),
+        share(s.both, s.withBoth), formatNumber(s.openEnds), formatNumber(s.boundary),
         formatNumber(s.nonmanifold), formatNumber(chord.median, 2), formatNumber(chord.max, 2)})
     row.push_back(cell);
   scores.push_back(s);
@@ -1456,16 +1467,16 @@ Table connectionScoreTable(const std::string& id, const TopologyCheck& check,
   Table table;
   table.id = id;
   table.caption =
-      "Connections over the corpus: runs (failed), share of runs with an expected "
-      "topology that get the components, the Euler characteristic and both right "
-      "(a failed run counts as wrong), total open ends, boundary and non-manifold "
-      "edges, median and largest chord error.";
+      "Connections over the corpus: runs (failed; not comparable: the problem states no "
+      "topology), share of the runs that expect the components, the Euler characteristic "
+      "and both that get them right (a failed run counts as wrong), total open ends, "
+      "boundary and non-manifold edges, median and largest chord error.";
   table.columns = keys;
-  for (std::string c :
-       {"runs", "failed", "components right", "Euler right", "both right", "open ends",
-        "boundary edges", "non-manifold edges", "median chord error", "max chord error"})
+  for (std::string c : {"runs", "failed", "not comparable", "components right", "Euler right",
+                        "both right", "open ends", "boundary edges", "non-manifold edges",
+                        "median chord error", "max chord error"})
     table.columns.push_back(c);
-  table.align = std::string(keys.size(), 'l') + "rrrrrrrrrr";
+  table.align = std::string(keys.size(), 'l') + "rrrrrrrrrrr";
   for (const Group& g : groupBy(check.t, keys))
     table.rows.push_back(connectionScoreRow(check, g, scores));
   return table;
@@ -1548,9 +1559,9 @@ std::vector<std::string> connectionSentences(const std::vector<ConnectionScore>&
   std::vector<std::string> sentences;
   std::vector<std::string> parts;
   for (const ConnectionScore& s : scores)
-    if (s.withExpect)
+    if (s.withBoth)
       parts.push_back("`" + s.label + "` " + std::to_string(s.both) + " of " +
-                      std::to_string(s.withExpect));
+                      std::to_string(s.withBoth));
   if (!parts.empty())
     sentences.push_back("Runs with both the components and the Euler characteristic right: " +
                         join(parts, ", ") + ".");
