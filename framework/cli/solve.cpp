@@ -205,8 +205,11 @@ int runSolve(SolveOptions options, const Problem& problem) {
             << "mesh: " << m.vertices << " vertices, " << m.edges << " edges, " << m.triangles
             << " triangles, " << m.components << " components, euler " << m.eulerCharacteristic
             << "\n"
-            << "defects: " << m.openEnds << " open ends, " << m.branchVertices
-            << " branch vertices, " << m.boundaryEdges << " boundary edges, " << m.nonmanifoldEdges
+            // The mesh's boundary (M ∩ ∂D for crossing, docs/crossing.md): in the field names of
+            // summary.json, so the two read the same.
+            << "boundary: " << m.boundaryComponents << " boundary components (" << m.boundaryEdges
+            << " boundary edges), " << m.openEnds << " open ends\n"
+            << "defects: " << m.branchVertices << " branch vertices, " << m.nonmanifoldEdges
             << " non-manifold edges\n"
             << "accuracy: max residual " << m.maxResidual << ", max chord error " << m.maxChordError
             << "\n"

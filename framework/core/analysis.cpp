@@ -232,6 +232,29 @@ std::vector<std::uint8_t> mergeCandidates(const Complex<S>& complex,
 
 }  // namespace
 
+/// Step 3 of weld: removes the vertices no simplex uses (a simplex that welding made
+/// degenerate leaves its vertex behind), renumbering the rest in order, so that no isolated
+/// vertex is written or counted as a component.
+template <class S>
+void dropUnusedVertices(Complex<S>& c) {
+  const std::size_t count = c.vertexCount(), n = std::size_t(c.n);
+  std::vector<std::int32_t> map(count, -1);
+  for (std::int32_t v : c.simplices) map[v] = 0;
+  if (std::none_of(map.begin(), map.end(), [](std::int32_t u) { return u < 0; })) return;
+  std::size_t kept = 0;
+  for (std::size_t v = 0; v < count; ++v) {
+    if (map[v] < 0) continue;
+    map[v] = static_cast<std::int32_t>(kept);
+    std::copy_n(c.vertices.begin() + std::ptrdiff_t(v * n), n,
+                c.vertices.begin() + std::ptrdiff_t(kept * n));
+    if (!c.vertexCell.empty()) c.vertexCell[kept] = c.vertexCell[v];
+    ++kept;
+  }
+  c.vertices.resize(kept * n);
+  if (!c.vertexCell.empty()) c.vertexCell.resize(kept);
+  for (std::int32_t& v : c.simplices) v = map[v];
+}
+
 template <class S>
 Complex<S> weld(const Complex<S>& complex, double tolerance) {
   const int n = complex.n;
@@ -325,6 +348,7 @@ Complex<S> weld(const Complex<S>& complex, double tolerance) {
           out.simplices[at[s] * width + i] = remap[complex.simplices[s * width + i]];
       },
       4096);
+  dropUnusedVertices(out);
   return out;
 }
 

@@ -1372,20 +1372,6 @@ class AdaptiveCrossing {
     return false;
   }
 
-  /// Whether interval evaluation proves that no level set F = t c, t in [0, 1], meets `box`,
-  /// M itself included (for m = 1 too, where intervalEmpty's sign rule lets F = 0 pass).
-  bool levelsMiss(const Box<S>& box) const {
-    std::vector<Interval<S>> x;
-    for (int j = 0; j < n_; ++j) x.emplace_back(box.lo[j], box.hi[j]);
-    for (int i = 0; i < m_; ++i) {
-      const Interval<S> f =
-          in_.system.equations()[i].template evaluate<S>(std::span<const Interval<S>>(x));
-      const S c = level_.empty() ? S(0) : level_[i];
-      if (f.lower() > std::max<S>(S(0), c) || f.upper() < std::min<S>(S(0), c)) return true;
-    }
-    return false;
-  }
-
   /// k = 2: the graph test of every (n-1)-face of a leaf (cached): M_c ∩ face is empty or a
   /// graph over one coordinate, so no closed curve of M_c lies inside a face.
   bool facesGraph(std::int32_t leaf, const RootForms& rf, LeafTests& t) {
@@ -1530,10 +1516,11 @@ class AdaptiveCrossing {
       // M_c misses the leaf; M may not (it lies 1e-8 h away): where it meets the leaf, the
       // isotopy from M to M_c needs the Jacobian's rank there, and on the domain's boundary
       // transversality to its faces.
+      // (For m = 1 the sign rule lets F = 0 pass as empty: the boundary's test is strict.)
       const bool missed = bandEmpty_[c] || intervalEmpty(leafBox(c), true);
       if (!missed && !cellGraph(c, rf, t))
         failure_[c] = Failure::kGraph;
-      else if (!boundaryTransverse(c, rf, t))
+      else if ((!missed || m_ == 1) && !boundaryTransverse(c, rf, t, true))
         failure_[c] = Failure::kBoundary;
       return;
     }
@@ -1545,7 +1532,7 @@ class AdaptiveCrossing {
       failure_[c] = Failure::kFaceGraph;
     } else if (!simpleLink(k_, c, polygons_, ps)) {
       failure_[c] = Failure::kLink;
-    } else if (!boundaryTransverse(c, rf, t)) {
+    } else if (!boundaryTransverse(c, rf, t, true)) {
       failure_[c] = Failure::kBoundary;
     }
   }
@@ -1555,8 +1542,9 @@ class AdaptiveCrossing {
   /// face of the domain of dimension n - j is missed by all of them (interval evaluation of
   /// F - t c, t in [0, 1]), or, for j <= k, J's columns of its free axes have full rank m over
   /// it (the graph test on those columns, whatever the level). A tangency of M with a domain
-  /// face, or M through a domain face of dimension below m, fails here.
-  bool boundaryTransverse(std::int32_t c, const RootForms& rf, LeafTests& t) {
+  /// face, or M through a domain face of dimension below m, fails here. `mark`: a failing leaf
+  /// whose face M is tangent to (tangentToFace) is marked stuck: refinement would not help.
+  bool boundaryTransverse(std::int32_t c, const RootForms& rf, LeafTests& t, bool mark) {
     std::vector<std::uint8_t> sides(n_, 0);
     const std::int64_t top = tree_.grid(tree_.level(c)).cellsPerAxis();
     bool touches = false;
@@ -1567,8 +1555,16 @@ class AdaptiveCrossing {
     }
     if (!touches) return true;
     for (const DomainStratum<S>& face : domainStrata(leafBox(c), sides, k_ + 1)) {
-      if (levelsMiss(face.box)) continue;
-      if (static_cast<int>(face.fixed.size()) > k_) return false;
+      if (levelsMiss(in_.system, face.box, std::span<const S>(level_), byEvaluation_)) continue;
+      prepare(c, rf, t);
+      if (slicesMiss(t.patches, std::span<const S>(rf.margins), leafBox(c), face,
+                     std::span<const S>(level_)))
+        continue;
+      const auto fail = [&] {
+        if (mark && tangentToFace(in_.system, face)) stuck_[c] = 1;
+        return false;
+      };
+      if (static_cast<int>(face.fixed.size()) > k_) return fail();
       // J over the leaf holds J over the face; the face's own enclosure, then the Bernstein
       // hulls, where that does not prove it.
       if (byEvaluation_ && leafJacobian(c, t) && t.test.graph(t.whole, face.free)) continue;
@@ -1576,8 +1572,7 @@ class AdaptiveCrossing {
       if (byEvaluation_ && evaluatedJacobian(face.box, t.jacobian, excluded) &&
           t.test.graph(t.jacobian, face.free))
         continue;
-      prepare(c, rf, t);
-      if (!hullGraph(t.patches, rf.margins, face.free, t.jacobian, t.test)) return false;
+      if (!hullGraph(t.patches, rf.margins, face.free, t.jacobian, t.test)) return fail();
     }
     return true;
   }
@@ -1939,7 +1934,7 @@ class AdaptiveCrossing {
     for (std::int32_t d : members) {
       std::vector<Bernstein<S>> own;
       LeafTests t{leafScratch(own), {}, graphTest_, false, -1, false, {}};
-      if (!boundaryTransverse(d, rf, t)) return false;
+      if (!boundaryTransverse(d, rf, t, false)) return false;
     }
     // The members are taken (block_ >= 0 until mergeBlocks numbers the block).
     NewBlock b{c, level, tentative, lo, std::move(members), std::move(empties), {}};
@@ -2056,7 +2051,8 @@ class AdaptiveCrossing {
       std::vector<std::int32_t> refine;
       for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
         if (tree_.active(c) && failure_[c] != Failure::kNone && tree_.level(c) < tree_.maxLevel() &&
-            !(failure_[c] == Failure::kCrossing && stuck_[c]))
+            !((failure_[c] == Failure::kCrossing || failure_[c] == Failure::kBoundary) &&
+              stuck_[c]))
           refine.push_back(c);
       }
       // Certified (or as far as it goes): then the leaves the chord error asks for.
@@ -2179,7 +2175,7 @@ class AdaptiveCrossing {
     t.refinedCells = refined_;
     for (const auto& block : blocks_) t.blockCells += static_cast<std::int64_t>(block.size());
     std::map<std::string, std::int64_t> reasons;
-    std::int64_t stuck = 0;
+    std::int64_t stuck = 0, tangent = 0;
     for (std::int32_t c = 0; c < static_cast<std::int32_t>(tree_.size()); ++c) {
       if (!tree_.active(c)) continue;
       t.maxLevel = std::max(t.maxLevel, tree_.level(c));
@@ -2190,6 +2186,7 @@ class AdaptiveCrossing {
       ++t.uncertifiedCells;
       ++reasons[failureName(failure_[c])];
       stuck += failure_[c] == Failure::kCrossing && stuck_[c];
+      tangent += failure_[c] == Failure::kBoundary && stuck_[c];
       UncertifiedCell u;
       const Box<double> box = cellBox(tree_.grid(tree_.level(c)), grid_.domain, tree_.index(c));
       u.lo = box.lo;
@@ -2214,7 +2211,10 @@ class AdaptiveCrossing {
       }
       if (reasons.count(failureName(Failure::kBoundary))) {
         why << "; M may touch the domain's boundary (tangent to a face of the domain, or through "
-            << "a face of it of dimension below " << m_ << ")";
+            << "a face of it of dimension below n - k = " << m_ << ")";
+        if (tangent > 0)
+          why << ", " << tangent << " next to a point of M where refinement cannot prove it (M "
+              << "tangent to the domain's boundary there, or through a corner of it)";
       }
       if (budgetSpent_) {
         why << "; refinement stopped at its budget of " << maxSolutionLeaves_
@@ -2231,7 +2231,8 @@ class AdaptiveCrossing {
   /// boundary"), blocks merged where every leaf is certified.
   void buildComplex(ConnectionOutput<S>& out) {
     collapseBlocks(out.topology.certified);
-    buildDualComplex(DualInput<S>{in_, tree_, domain_, polygons_, rootPoints_, singular_}, out);
+    buildDualComplex(
+        DualInput<S>{in_, tree_, domain_, polygons_, rootPoints_, singular_, position_.slack}, out);
   }
 
   const ConnectionInput<S>& in_;

@@ -10,7 +10,10 @@
 #include <span>
 #include <vector>
 
+#include "framework/core/bernstein.hpp"
 #include "framework/core/box.hpp"
+#include "framework/core/scalar.hpp"
+#include "framework/core/system.hpp"
 
 namespace ndc::crossing_detail {
 
@@ -64,5 +67,52 @@ std::vector<DomainStratum<S>> domainStrata(const Box<S>& box, std::span<const st
   for (int j = 1; j <= deepest && j <= n; ++j) choose(choose, 0, j);
   return out;
 }
+
+/// Whether no level set F = t level, t in [0, 1], meets `box` (M itself included), proven by
+/// interval evaluation of each equation over the box, or (`byEvaluation`: programs of
+/// arithmetic operations only) by its mean-value form F_i(y) + J_i(X) (X - y) from
+/// midpoint-radius runs, which is of second order and so proves much closer faces.
+template <class S>
+bool levelsMiss(const System<S>& system, const Box<S>& box, std::span<const S> level,
+                bool byEvaluation);
+
+/// Whether the Bernstein coefficients of the leaf's `patches` on `face` (a face of the leaf
+/// that fixes the axes `fixed` at the ends of the leaf's box `leaf`) prove that no level set
+/// F = t level, t in [0, 1], meets it; `margins`: the coefficients' rounding margins.
+template <class S>
+bool slicesMiss(const std::vector<Bernstein<S>>& patches, std::span<const S> margins,
+                const Box<S>& leaf, const DomainStratum<S>& face, std::span<const S> level);
+
+/// Minimum-norm Newton onto M ∩ the plane where every axis but `freeAxes` keeps its value in x
+/// (its steps move the free coordinates only), until a step is at the rounding floor. False when
+/// the Jacobian's free columns lose rank on the way or a value is not finite; the caller checks
+/// convergence.
+template <class S>
+bool faceNewton(const System<S>& system, std::span<S> x, const std::vector<int>& freeAxes);
+
+/// Whether refinement cannot prove the face of a leaf that failed boundaryTransverse: Newton
+/// from its centre (faceNewton, or Gauss-Newton on a face of dimension below m) reaches a point
+/// of M in the face's plane, within the face widened by its own width, where the Jacobian's
+/// columns of the free axes lose rank (their smallest singular value below 1e-6 of the
+/// Jacobian's largest; always, on a face of dimension below m): M is tangent to the face of the
+/// domain there, lies in it along a curve, or passes through a corner of the domain, and every
+/// finer leaf around the point fails the same way. A heuristic that only decides where
+/// refinement is spent; it proves nothing.
+template <class S>
+bool tangentToFace(const System<S>& system, const DomainStratum<S>& face);
+
+extern template bool faceNewton(const System<double>&, std::span<double>, const std::vector<int>&);
+extern template bool faceNewton(const System<Mpfr>&, std::span<Mpfr>, const std::vector<int>&);
+extern template bool tangentToFace(const System<double>&, const DomainStratum<double>&);
+extern template bool tangentToFace(const System<Mpfr>&, const DomainStratum<Mpfr>&);
+extern template bool levelsMiss(const System<double>&, const Box<double>&, std::span<const double>,
+                                bool);
+extern template bool levelsMiss(const System<Mpfr>&, const Box<Mpfr>&, std::span<const Mpfr>, bool);
+extern template bool slicesMiss(const std::vector<Bernstein<double>>&, std::span<const double>,
+                                const Box<double>&, const DomainStratum<double>&,
+                                std::span<const double>);
+extern template bool slicesMiss(const std::vector<Bernstein<Mpfr>>&, std::span<const Mpfr>,
+                                const Box<Mpfr>&, const DomainStratum<Mpfr>&,
+                                std::span<const Mpfr>);
 
 }  // namespace ndc::crossing_detail

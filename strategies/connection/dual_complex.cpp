@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "framework/core/iteration.hpp"
-#include "framework/core/minimum_norm.hpp"
 #include "framework/core/parallel.hpp"
+#include "strategies/connection/domain_boundary.hpp"
 #include "strategies/connection/jacobian_work.hpp"
 
 namespace ndc::crossing_detail {
@@ -74,7 +74,6 @@ class DualComplex {
     for (std::size_t p = 0; p < polygons_.size(); ++p) cycles[p] = cycleOf(p);
     out.offManifoldVertices += placeBoundaryVertices(out.complex);
     addSimplices(cycles, out.complex);
-    dropUnused(base, out.complex);
   }
 
  private:
@@ -189,6 +188,11 @@ class DualComplex {
     const std::vector<S> mean(x.begin(), x.end());
     d.converged = d_.in.project(x).converged;
     if (!d.converged) std::copy(mean.begin(), mean.end(), x.begin());
+    if (d.converged && nearDomainBoundary(x)) {
+      std::vector<int> all(n_);
+      std::iota(all.begin(), all.end(), 0);
+      snapToFaces(x, all);
+    }
     if (d.piece != 0) return;
     const S width = S(d_.tree.grid(d_.tree.level(d.leaf)).cellWidth(0));
     std::optional<JacobianWork<S>> fresh;
@@ -280,8 +284,10 @@ class DualComplex {
   }
 
   /// The boundary vertices' points, appended to `complex`: the mean of each one's crossings
-  /// on its domain face, projected onto M ∩ that face (its fixed coordinates stay), then kept
-  /// in the domain. Returns how many projections failed (those keep the mean).
+  /// on its domain face, projected onto M ∩ that face (its fixed coordinates stay; a free one
+  /// may end beyond the domain by as much as the crossings, 64 * 2^-26 cell widths, where M
+  /// meets a lower-dimensional face of it). Returns how many projections failed (those keep
+  /// the mean).
   std::int64_t placeBoundaryVertices(Complex<S>& complex) const {
     const std::size_t first = complex.vertexCount();
     complex.vertices.resize((first + boundary_.size()) * n_);
@@ -301,53 +307,61 @@ class DualComplex {
       if (!projectOnFace(x, freeAxes)) {
         std::copy(mean.begin(), mean.end(), x.begin());
         failed[b] = 1;
+      } else {
+        snapToFaces(x, freeAxes);
       }
-      for (int j : freeAxes) x[j] = std::clamp<S>(x[j], d_.domain.lo[j], d_.domain.hi[j]);
       complex.vertexCell[first + b] = d_.tree.baseCell(v.leaf);
     });
     return std::count(failed.begin(), failed.end(), std::uint8_t{1});
   }
 
-  /// projectOnFace's working storage, per thread (threadScratch).
-  struct FaceNewton {
-    std::vector<S> f, jacobian, free, step, copy;
-    MinimumNormSolver<S> solver;
-  };
+  /// Whether x lies within the crossings' slack of a face of the domain.
+  bool nearDomainBoundary(std::span<const S> x) const {
+    using std::abs;
+    for (int j = 0; j < n_; ++j) {
+      if (abs(x[j] - d_.domain.lo[j]) <= d_.slack || abs(d_.domain.hi[j] - x[j]) <= d_.slack)
+        return true;
+    }
+    return false;
+  }
 
-  /// Minimum-norm Newton onto M ∩ the face where every axis but `freeAxes` keeps its value.
-  /// True when it reaches a point that the run's own projection leaves where it is (on M by
-  /// its backward-error test) without leaving the face.
+  /// A vertex within the crossings' slack of a face of the domain (of lower dimension than its
+  /// own: M passes through that face, and M_c misses it by about c): moved onto M ∩ that face while
+  /// the face keeps m free axes, so that the vertices of the facets meeting there become one
+  /// point (they would stay 1e-9 apart, too far to weld, and leave a sliver triangle).
+  void snapToFaces(std::span<S> x, std::vector<int>& freeAxes) const {
+    using std::abs;
+    while (static_cast<int>(freeAxes.size()) > m_) {
+      int best = -1;
+      S gap = d_.slack;
+      for (std::size_t t = 0; t < freeAxes.size(); ++t) {
+        const int j = freeAxes[t];
+        const S g = std::min<S>(abs(x[j] - d_.domain.lo[j]), abs(d_.domain.hi[j] - x[j]));
+        if (g <= gap) gap = g, best = static_cast<int>(t);
+      }
+      if (best < 0) return;
+      const int j = freeAxes[best];
+      std::vector<S> y(x.begin(), x.end());
+      std::vector<int> fewer = freeAxes;
+      fewer.erase(fewer.begin() + best);
+      y[j] = abs(x[j] - d_.domain.lo[j]) < abs(d_.domain.hi[j] - x[j]) ? d_.domain.lo[j]
+                                                                       : d_.domain.hi[j];
+      if (!projectOnFace(std::span<S>(y), fewer)) return;
+      std::copy(y.begin(), y.end(), x.begin());
+      freeAxes = std::move(fewer);
+    }
+  }
+
+  /// Minimum-norm Newton onto M ∩ the face where every axis but `freeAxes` keeps its value
+  /// (faceNewton), on M when the run's own projection then leaves the point where it is.
   bool projectOnFace(std::span<S> x, const std::vector<int>& freeAxes) const {
     using std::abs;
-    std::optional<FaceNewton> fresh;
-    FaceNewton& w = threadScratch<S, FaceNewton>(fresh);
-    const int free = static_cast<int>(freeAxes.size());
-    w.f.resize(m_), w.jacobian.resize(std::size_t(m_) * n_);
-    w.free.resize(std::size_t(m_) * free), w.step.resize(free);
-    const S threshold = S(8 * free) * ScalarTraits<S>::epsilon();
-    for (int it = 0; it < kFaceIterations; ++it) {
-      d_.in.system.evaluate(std::span<const S>(x.data(), x.size()), w.f, w.jacobian);
-      if (!std::all_of(w.f.begin(), w.f.end(), isFinite<S>)) return false;
-      // The step moves the free coordinates only: J's columns of the free axes.
-      for (int r = 0; r < m_; ++r) {
-        for (int t = 0; t < free; ++t)
-          w.free[std::size_t(r) * free + t] = w.jacobian[std::size_t(r) * n_ + freeAxes[t]];
-      }
-      if (!w.solver.factor(w.free.data(), m_, free, threshold)) return false;
-      w.solver.solve(w.f.data(), w.step.data());
-      S stepNorm = 0;
-      for (int t = 0; t < free; ++t) {
-        x[freeAxes[t]] -= w.step[t];
-        stepNorm = std::max<S>(stepNorm, abs(w.step[t]));
-      }
-      if (IterationGuard<S>::stagnated(stepNorm, normInf<S>(x))) break;
-    }
-    // On M by the projection's own test: from here it moves no farther than rounding.
-    w.copy.assign(x.begin(), x.end());
-    if (!d_.in.project(std::span<S>(w.copy)).converged) return false;
+    if (!faceNewton(d_.in.system, x, freeAxes)) return false;
+    std::vector<S> copy(x.begin(), x.end());
+    if (!d_.in.project(std::span<S>(copy)).converged) return false;
     const S size = 1 + normInf<S>(std::span<const S>(x.data(), x.size()));
     for (int j = 0; j < n_; ++j) {
-      if (abs(w.copy[j] - x[j]) > S(1024) * ScalarTraits<S>::epsilon() * size) return false;
+      if (abs(copy[j] - x[j]) > S(1024) * ScalarTraits<S>::epsilon() * size) return false;
     }
     return true;
   }
@@ -402,35 +416,6 @@ class DualComplex {
       put({v[1], v[2], v[3]});
     }
   }
-
-  /// Removes the vertices from `base` on that no simplex uses (a leaf whose polygons all
-  /// collapsed), renumbering the rest in order: every vertex written belongs to a simplex.
-  static void dropUnused(std::size_t base, Complex<S>& complex) {
-    const std::size_t count = complex.vertexCount(), n = std::size_t(complex.n);
-    std::vector<std::int32_t> map(count, -1);
-    for (std::int32_t v : complex.simplices) map[v] = 0;
-    if (std::none_of(map.begin() + std::ptrdiff_t(base), map.end(),
-                     [](std::int32_t u) { return u < 0; }))
-      return;
-    std::size_t kept = base;
-    for (std::size_t v = 0; v < count; ++v) {
-      if (v < base) {
-        map[v] = static_cast<std::int32_t>(v);
-        continue;
-      }
-      if (map[v] < 0) continue;
-      map[v] = static_cast<std::int32_t>(kept);
-      std::copy_n(complex.vertices.begin() + std::ptrdiff_t(v * n), n,
-                  complex.vertices.begin() + std::ptrdiff_t(kept * n));
-      complex.vertexCell[kept] = complex.vertexCell[v];
-      ++kept;
-    }
-    complex.vertices.resize(kept * n);
-    complex.vertexCell.resize(kept);
-    for (std::int32_t& v : complex.simplices) v = map[v];
-  }
-
-  static constexpr int kFaceIterations = 40;  ///< as the run's projection
 
   const DualInput<S>& d_;
   const std::vector<Polygon>& polygons_;

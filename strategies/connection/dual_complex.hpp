@@ -28,10 +28,12 @@ struct DualInput {
   const std::vector<Polygon>& polygons;
   const std::vector<S>& roots;                ///< n coordinates per crossing (Polygon::root)
   const std::vector<std::uint8_t>& singular;  ///< per leaf: next to a singular face
+  S slack;  ///< how far beyond the domain crossings are kept (docs/crossing.md, "Domain boundary")
 };
 
 /// Appends the dual complex to `out.complex` and counts its ambiguous and singular cells and
-/// its vertices off M into `out`. Every vertex it writes belongs to a simplex.
+/// its vertices off M into `out`. (A vertex whose simplices all collapsed is dropped when the
+/// mesh is welded, ndc::weld.)
 template <class S>
 void buildDualComplex(const DualInput<S>& input, ConnectionOutput<S>& out);
 

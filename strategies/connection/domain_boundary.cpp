@@ -1,0 +1,175 @@
+#include "strategies/connection/domain_boundary.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "framework/core/interval.hpp"
+#include "framework/core/iteration.hpp"
+#include "framework/core/minimum_norm.hpp"
+#include "framework/core/parallel.hpp"
+#include "strategies/connection/certificate.hpp"
+#include "strategies/connection/face_solver.hpp"
+#include "strategies/connection/jacobian_work.hpp"
+#include "strategies/connection/leaf_model.hpp"
+
+namespace ndc::crossing_detail {
+
+template <class S>
+bool levelsMiss(const System<S>& system, const Box<S>& box, std::span<const S> level,
+                bool byEvaluation) {
+  using I = Interval<S>;
+  using std::abs;
+  const int n = box.dim(), m = system.m();
+  // The band of levels between 0 and c_i.
+  const auto misses = [&](const I& f, int i) {
+    return f.lower() > std::max<S>(S(0), level[i]) || f.upper() < std::min<S>(S(0), level[i]);
+  };
+  std::vector<I> x;
+  for (int j = 0; j < n; ++j) x.emplace_back(box.lo[j], box.hi[j]);
+  for (int i = 0; i < m; ++i) {
+    if (misses(system.equations()[i].template evaluate<S>(std::span<const I>(x)), i)) return true;
+  }
+  if (!byEvaluation) return false;
+  // The mean-value form around the centre y, for the middle level c / 2, widened by |c| / 2.
+  std::vector<S> centre, radius, middle(level.begin(), level.end());
+  for (S& c : middle) c /= 2;
+  centreAndRadius(box, centre, radius);
+  std::vector<int> all(n);
+  for (int j = 0; j < n; ++j) all[j] = j;
+  std::vector<I> jacobian, fy;
+  bool excluded = false;
+  if (!encloseSystem(threadEvaluators(system), std::span<const S>(centre),
+                     std::span<const S>(radius), std::span<const S>(middle),
+                     std::span<const int>(all), jacobian, fy, excluded, false))
+    return false;
+  const S up = S(1) + S(8 * (n + m + 8)) * ScalarTraits<S>::epsilon();
+  for (int i = 0; i < m; ++i) {
+    S spread = abs(middle[i]);
+    for (int j = 0; j < n; ++j) {
+      const I& d = jacobian[std::size_t(i) * n + j];
+      spread += std::max<S>(abs(d.lower()), abs(d.upper())) * radius[j];
+    }
+    if (!(fy[i] + I(-spread * up, spread * up)).containsZero()) return true;
+  }
+  return false;
+}
+
+template <class S>
+bool slicesMiss(const std::vector<Bernstein<S>>& patches, std::span<const S> margins,
+                const Box<S>& leaf, const DomainStratum<S>& face, std::span<const S> level) {
+  // Slice the largest fixed axis first, so that the smaller ones keep their index.
+  std::vector<int> fixed = face.fixed;
+  std::sort(fixed.rbegin(), fixed.rend());
+  for (std::size_t i = 0; i < patches.size(); ++i) {
+    Bernstein<S> slice = patches[i];
+    for (int a : fixed) slice = slice.faceSlice(a, face.box.lo[a] == leaf.hi[a]);
+    const S lo = std::min<S>(S(0), level[i]), hi = std::max<S>(S(0), level[i]);
+    if (clearsRange(slice, lo, hi, margins[i])) return true;
+  }
+  return false;
+}
+
+/// faceNewton's working storage, per thread (threadScratch).
+template <class S>
+struct FaceNewtonWork {
+  std::vector<S> f, jacobian, free, step;
+  MinimumNormSolver<S> solver;
+};
+
+template <class S>
+bool faceNewton(const System<S>& system, std::span<S> x, const std::vector<int>& freeAxes) {
+  using std::abs;
+  constexpr int kIterations = 40;  // as the run's projection
+  std::optional<FaceNewtonWork<S>> fresh;
+  FaceNewtonWork<S>& w = threadScratch<S, FaceNewtonWork<S>>(fresh);
+  const int n = system.n(), m = system.m(), free = static_cast<int>(freeAxes.size());
+  if (free < m) return false;
+  w.f.resize(m), w.jacobian.resize(std::size_t(m) * n);
+  w.free.resize(std::size_t(m) * free), w.step.resize(free);
+  const S threshold = S(8 * free) * ScalarTraits<S>::epsilon();
+  for (int it = 0; it < kIterations; ++it) {
+    system.evaluate(std::span<const S>(x.data(), x.size()), w.f, w.jacobian);
+    if (!std::all_of(w.f.begin(), w.f.end(), isFinite<S>)) return false;
+    // The step moves the free coordinates only: J's columns of the free axes.
+    for (int r = 0; r < m; ++r) {
+      for (int t = 0; t < free; ++t)
+        w.free[std::size_t(r) * free + t] = w.jacobian[std::size_t(r) * n + freeAxes[t]];
+    }
+    if (!w.solver.factor(w.free.data(), m, free, threshold)) return false;
+    w.solver.solve(w.f.data(), w.step.data());
+    S stepNorm = 0;
+    for (int t = 0; t < free; ++t) {
+      x[freeAxes[t]] -= w.step[t];
+      stepNorm = std::max<S>(stepNorm, abs(w.step[t]));
+    }
+    if (IterationGuard<S>::stagnated(stepNorm, normInf<S>(std::span<const S>(x.data(), x.size()))))
+      return true;
+  }
+  return true;
+}
+
+template <class S>
+bool tangentToFace(const System<S>& system, const DomainStratum<S>& face) {
+  using std::abs;
+  using Matrix = typename JacobianWork<S>::Matrix;
+  using Vector = typename JacobianWork<S>::Vector;
+  const int n = system.n(), m = system.m(), free = static_cast<int>(face.free.size());
+  std::vector<S> x(n);
+  for (int j = 0; j < n; ++j) x[j] = (face.box.lo[j] + face.box.hi[j]) / 2;
+  // Gauss-Newton towards a point of M on the face's plane: least squares by the singular
+  // values, so that it goes on where the free columns lose rank (on a face of dimension
+  // below m too).
+  std::vector<S> f(m), jac(std::size_t(m) * n);
+  Matrix a(m, free);
+  Vector r(m);
+  for (int it = 0; it < 40 && free > 0; ++it) {  // (a corner of D: nothing to move)
+    system.evaluate(std::span<const S>(x), f, jac);
+    if (!std::all_of(f.begin(), f.end(), isFinite<S>)) return false;
+    for (int i = 0; i < m; ++i) {
+      r(i) = f[i];
+      for (int t = 0; t < free; ++t) a(i, t) = jac[std::size_t(i) * n + face.free[t]];
+    }
+    const Vector step = a.jacobiSvd(Eigen::ComputeThinU | Eigen::ComputeThinV).solve(r);
+    S size = 0;
+    for (int t = 0; t < free; ++t) {
+      x[face.free[t]] -= step(t);
+      size = std::max<S>(size, abs(step(t)));
+    }
+    if (IterationGuard<S>::stagnated(size, normInf<S>(std::span<const S>(x)))) break;
+  }
+  // Within the face widened by its width, and on M.
+  for (int j : face.free) {
+    const S w = face.box.hi[j] - face.box.lo[j];
+    if (!(x[j] >= face.box.lo[j] - w && x[j] <= face.box.hi[j] + w)) return false;
+  }
+  std::optional<JacobianWork<S>> fresh;
+  JacobianWork<S>& work = threadScratch<S, JacobianWork<S>>(fresh);
+  const auto& full = work.jacobianAt(system, std::span<const S>(x));
+  // On M: every residual small against the gradient times the face's size.
+  for (int i = 0; i < m; ++i) {
+    S scale = 0;
+    for (int j = 0; j < n; ++j) scale += abs(full(i, j)) * (face.box.hi[j] - face.box.lo[j]);
+    if (!(abs(work.f[i]) <= S(1e-6) * scale)) return false;
+  }
+  if (free < m) return true;  // M passes through a face of D of dimension below m
+  Matrix columns(m, free);
+  for (std::size_t t = 0; t < face.free.size(); ++t) columns.col(int(t)) = full.col(face.free[t]);
+  Eigen::JacobiSVD<Matrix> svd(columns);
+  const S largest = work.singularValues()(0);
+  const auto& sigma = svd.singularValues();
+  return !(sigma(m - 1) > S(1e-6) * largest);
+}
+
+template bool faceNewton(const System<double>&, std::span<double>, const std::vector<int>&);
+template bool faceNewton(const System<Mpfr>&, std::span<Mpfr>, const std::vector<int>&);
+template bool tangentToFace(const System<double>&, const DomainStratum<double>&);
+template bool tangentToFace(const System<Mpfr>&, const DomainStratum<Mpfr>&);
+template bool levelsMiss(const System<double>&, const Box<double>&, std::span<const double>, bool);
+template bool levelsMiss(const System<Mpfr>&, const Box<Mpfr>&, std::span<const Mpfr>, bool);
+template bool slicesMiss(const std::vector<Bernstein<double>>&, std::span<const double>,
+                         const Box<double>&, const DomainStratum<double>&, std::span<const double>);
+template bool slicesMiss(const std::vector<Bernstein<Mpfr>>&, std::span<const Mpfr>,
+                         const Box<Mpfr>&, const DomainStratum<Mpfr>&, std::span<const Mpfr>);
+
+}  // namespace ndc::crossing_detail
