@@ -451,3 +451,48 @@ TEMPLATE_TEST_CASE("Residual and chord error of a polygon inscribed in the unit 
   }
 }
 //! [analysis-chord]
+
+TEMPLATE_TEST_CASE("Welding then dropping unused vertices leaves no isolated vertex", "[analysis]",
+                   NDC_SCALARS) {
+  // Generated triangle fans with, between them, vertices of no triangle and triangles whose
+  // corners weld into one point (as where M passes through a corner of the domain): every
+  // vertex left belongs to a triangle, the triangles keep their corners' coordinates.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  for (int round = 0; round < 20; ++round) {
+    ndc::Complex<TestType> c;
+    c.n = 3;
+    c.k = 2;
+    for (int t = 0; t < 30; ++t) {
+      std::vector<TestType> x(3), y, z, w = {TestType(unit(rng)), TestType(2), TestType(2)};
+      for (TestType& v : x) v = TestType(unit(rng));
+      y = {TestType(unit(rng)), x[1], x[2]};
+      z = {x[0], TestType(unit(rng)), x[2]};
+      const auto a = c.addVertex(x), b = c.addVertex(y), d = c.addVertex(z);
+      if (t % 3 == 0) c.addVertex(w);  // stray
+      if (t % 4 == 0) {
+        // Three corners within the weld tolerance of one point: a degenerate triangle.
+        const auto e = c.addVertex(x), f = c.addVertex(x);
+        const std::int32_t collapsed[3] = {a, e, f};
+        c.addSimplex(collapsed);
+      }
+      const std::int32_t tri[3] = {a, b, d};
+      c.addSimplex(tri);
+    }
+    ndc::Complex<TestType> welded = ndc::weld(c, 1e-9);
+    const std::size_t triangles = welded.simplexCount();
+    std::vector<TestType> before;
+    for (std::int32_t v : welded.simplices)
+      for (const TestType& x : welded.vertex(std::size_t(v))) before.push_back(x);
+    ndc::dropUnusedVertices(welded);
+    std::vector<char> used(welded.vertexCount(), 0);
+    for (std::int32_t v : welded.simplices) used[std::size_t(v)] = 1;
+    CHECK(std::count(used.begin(), used.end(), 0) == 0);
+    CHECK(welded.vertexCount() == 90);  // 3 per fan triangle; the welded corners are theirs
+    CHECK(welded.simplexCount() == triangles);
+    std::vector<TestType> after;
+    for (std::int32_t v : welded.simplices)
+      for (const TestType& x : welded.vertex(std::size_t(v))) after.push_back(x);
+    CHECK(after == before);
+  }
+}

@@ -232,9 +232,6 @@ std::vector<std::uint8_t> mergeCandidates(const Complex<S>& complex,
 
 }  // namespace
 
-/// Step 3 of weld: removes the vertices no simplex uses (a simplex that welding made
-/// degenerate leaves its vertex behind), renumbering the rest in order, so that no isolated
-/// vertex is written or counted as a component.
 template <class S>
 void dropUnusedVertices(Complex<S>& c) {
   const std::size_t count = c.vertexCount(), n = std::size_t(c.n);
@@ -348,7 +345,6 @@ Complex<S> weld(const Complex<S>& complex, double tolerance) {
           out.simplices[at[s] * width + i] = remap[complex.simplices[s * width + i]];
       },
       4096);
-  dropUnusedVertices(out);
   return out;
 }
 
@@ -538,6 +534,8 @@ MeshStats analyse(const Complex<S>& welded, const System<S>& system, const Proje
 
 template Complex<double> weld(const Complex<double>&, double);
 template Complex<Mpfr> weld(const Complex<Mpfr>&, double);
+template void dropUnusedVertices(Complex<double>&);
+template void dropUnusedVertices(Complex<Mpfr>&);
 template MeshStats analyse(const Complex<double>&, const System<double>&, const Projector<double>&);
 template MeshStats analyse(const Complex<Mpfr>&, const System<Mpfr>&, const Projector<Mpfr>&);
 

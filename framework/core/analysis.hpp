@@ -23,8 +23,16 @@ Complex<S> weld(const Complex<S>& complex, double tolerance);
 template <class S>
 MeshStats analyse(const Complex<S>& welded, const System<S>& system, const Projector<S>& project);
 
+/// Removes the vertices that no simplex uses, renumbering the rest in order: a mesh is written
+/// with no isolated vertex, which would count as a component (a simplex that welding made
+/// degenerate, as where M passes through a corner of the domain, leaves its vertex behind).
+template <class S>
+void dropUnusedVertices(Complex<S>& complex);
+
 extern template Complex<double> weld(const Complex<double>&, double);
 extern template Complex<Mpfr> weld(const Complex<Mpfr>&, double);
+extern template void dropUnusedVertices(Complex<double>&);
+extern template void dropUnusedVertices(Complex<Mpfr>&);
 extern template MeshStats analyse(const Complex<double>&, const System<double>&,
                                   const Projector<double>&);
 extern template MeshStats analyse(const Complex<Mpfr>&, const System<Mpfr>&,

@@ -467,14 +467,17 @@ void countClasses(Summary& summary, const std::vector<CellClass>& classes) {
 }
 
 /// The complex joined at the singular points of M (framework/pipeline/singular.hpp), then
-/// welded (vertices closer than 1e-9 of the domain's largest width are one).
+/// welded (vertices closer than 1e-9 of the domain's largest width are one), with no vertex
+/// that belongs to no simplex.
 template <class S>
 Complex<S> weldAtSingularPoints(Complex<S>& complex, const std::vector<SingularPoint>& points,
                                 const Grid& grid) {
   double diameter = 0;
   for (int j = 0; j < grid.n; ++j) diameter = std::max(diameter, grid.domain.width(j));
   joinAtSingularPoints<S>(complex, points, grid);
-  return weld<S>(complex, 1e-9 * diameter);
+  Complex<S> welded = weld<S>(complex, 1e-9 * diameter);
+  dropUnusedVertices(welded);
+  return welded;
 }
 
 /// The outputs in double: the welded mesh (its simplices oriented by the caller) and the

@@ -33,7 +33,7 @@ struct DualInput {
 
 /// Appends the dual complex to `out.complex` and counts its ambiguous and singular cells and
 /// its vertices off M into `out`. (A vertex whose simplices all collapsed is dropped when the
-/// mesh is welded, ndc::weld.)
+/// mesh is welded, ndc::dropUnusedVertices.)
 template <class S>
 void buildDualComplex(const DualInput<S>& input, ConnectionOutput<S>& out);
 
