@@ -2078,18 +2078,20 @@ class AdaptiveCrossing {
     }
   }
 
-  /// `--tolerance`: the leaves below the maximum level that are nodes of a mesh polygon whose
-  /// simplices have a barycentre farther than the tolerance from its Newton projection onto M
-  /// (the analysis's chord error). Each leaf's vertex is taken as the projection of the mean of
-  /// its crossings, as the dual complex places it (a block's: of the block's crossings).
+  /// `--tolerance`: the leaves below the maximum level that are nodes of a mesh polygon inside
+  /// the domain whose simplices have a barycentre farther than the tolerance from its Newton
+  /// projection onto M (the analysis's chord error; the polygons at the domain's boundary, whose
+  /// boundary vertices are not placed here, are not tested). Each leaf's vertex is taken as the
+  /// projection of the mean of its crossings, as the dual complex places it (a block's: of the
+  /// block's crossings).
   std::vector<std::int32_t> chordLeaves() const {
     const std::size_t count = tree_.size();
     const auto owner = [&](std::int64_t c) { return static_cast<std::size_t>(blockNode(c)); };
     std::vector<S> vertex(count * n_, S(0));
     std::vector<std::int32_t> crossings(count, 0);
     for (const Polygon& poly : polygons_) {
-      if (poly.outside) continue;
       for (int i = 0; i < poly.size; ++i) {
+        if (poly.node[i] < 0) continue;  // beyond the domain (its crossing counts for the leaf)
         const std::size_t c = owner(poly.node[i]);
         for (int j = 0; j < n_; ++j)
           vertex[c * n_ + j] += rootPoints_[std::size_t(poly.root) * n_ + j];
