@@ -219,3 +219,20 @@ TEMPLATE_TEST_CASE("boundary: a crossing of a domain edge at a grid vertex", "[b
       CHECK(r.summary.topology.reason.find("crossing") != std::string::npos);
   }
 }
+
+TEMPLATE_TEST_CASE("boundary: a band through the box along a grid line", "[boundary]",
+                   NDC_SCALARS) {
+  // The natural radius 0.5 puts the line x = 0.5, z = -0.5 of the cylinder in a grid line: the
+  // known limit of tangency with the grid along a curve (docs/certificate.md, "Status"). The
+  // annulus must still come out right, its boundary on the faces y = -1 and y = 1, and a run
+  // that is not certified must say that crossings are the cause.
+  const Problem p = boxProblem("band-grid-line", 3, {"(x-0.1)^2 + (z+0.2)^2 - 0.25"});
+  const RunResult r = solve<TestType>(p, 3, 5);
+  INFO(describe(r));
+  const auto& m = r.summary.mesh;
+  CHECK(m.components == 1);
+  CHECK(m.eulerCharacteristic == 0);
+  CHECK(m.boundaryComponents == 2);
+  if (!r.summary.topology.certified)
+    CHECK(r.summary.topology.reason.find("crossing") != std::string::npos);
+}
