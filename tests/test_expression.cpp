@@ -11,6 +11,7 @@
 
 #include "framework/core/bernstein.hpp"
 #include "framework/core/expression.hpp"
+#include "framework/core/parser.hpp"
 #include "tests/test_support.hpp"
 
 namespace {
@@ -499,4 +500,134 @@ TEMPLATE_TEST_CASE("Expression: interval evaluation encloses sampled values and 
   CHECK(samples > 1000);
   CHECK(valueFailures == 0);
   CHECK(gradientFailures == 0);
+}
+
+// ---- Compilation to the canonical form (canonical.hpp) ----------------------------------------
+
+namespace {
+
+/// A random decimal literal: digits, maybe a point, maybe an exponent.
+std::string randomLiteral(std::mt19937& rng) {
+  std::string s = std::to_string(std::uniform_int_distribution<int>(0, 999)(rng));
+  if (rng() % 2) s += "." + std::to_string(std::uniform_int_distribution<int>(0, 99)(rng));
+  if (rng() % 4 == 0) s += "e" + std::to_string(std::uniform_int_distribution<int>(-3, 2)(rng));
+  return s;
+}
+
+/// A random monomial of total degree <= 3 in `v`, as text: `c*x^a*y`.
+std::string randomMonomial(std::mt19937& rng, const std::vector<std::string>& v) {
+  std::string s = randomLiteral(rng);
+  const int degree = std::uniform_int_distribution<int>(0, 3)(rng);
+  for (int d = 0; d < degree; ++d) s += "*" + v[rng() % v.size()];
+  return s;
+}
+
+/// A long generated equation: `count` signed copies of a few monomials in random order (so
+/// like terms collect), some as products of sums, some divided by 4 or 0.8 (finite decimals).
+std::string generatedEquation(std::mt19937& rng, const std::vector<std::string>& v, int count) {
+  std::vector<std::string> pool;
+  for (int i = 0; i < 6; ++i) pool.push_back(randomMonomial(rng, v));
+  pool.push_back("(" + v[0] + " + 1)*(" + v[1 % v.size()] + " - 2)");
+  pool.push_back(v[0] + "^2/4");
+  pool.push_back(v.back() + "/0.8");
+  std::string text;
+  for (int i = 0; i < count; ++i) {
+    text += i == 0 ? "" : (rng() % 3 == 0 ? " - " : " + ");
+    text += pool[rng() % pool.size()];
+  }
+  return text;
+}
+
+}  // namespace
+
+TEMPLATE_TEST_CASE("Expression: a long generated equation is compiled to its collected terms",
+                   "[expression]", NDC_SCALARS) {
+  using S = TestType;
+  std::mt19937 rng(40);
+  for (int trial = 0; trial < 12; ++trial) {
+    const int n = 2 + trial % 3;
+    const std::vector<std::string> v = names(n);
+    const std::string text = generatedEquation(rng, v, 200 + 150 * trial);
+    INFO("trial " << trial << ": " << text.substr(0, 200));
+    const Expression e = Expression::parse(text, v);
+    // The program is the collected one (at most 9 monomials of degree <= 3 in n variables),
+    // far shorter than the text's.
+    CHECK(e.writtenInstructions() > 1000);
+    CHECK(e.tape().ops().size() * 10 < e.writtenInstructions());
+    // The same polynomial: the exact value (the written program in 2000-bit MPFR) at random
+    // points agrees with the collected program's in S to rounding.
+    const ndc::Tape written = ndc::parseExpression(text, v);
+    for (int p = 0; p < 5; ++p) {
+      std::vector<S> x;
+      for (int j = 0; j < n; ++j) x.push_back(uniform<S>(rng, -2.0, 2.0));
+      PrecisionScope<Mpfr> high(kExactBits);
+      std::vector<Mpfr> px;
+      for (const S& value : x) px.push_back(exact(value));
+      const Mpfr truth = ndc::evaluateTape<Mpfr>(written, px);
+      const Mpfr collected = ndc::evaluateTape<Mpfr>(e.tape(), px);
+      CHECK(toDouble(Mpfr(abs(truth - collected) / (1 + abs(truth)))) <= 1e-300);
+      const S value = e.evaluate<S>(x);
+      CHECK(absD(S(value - S(truth))) <= 1e-9 * std::max(1.0, absD(S(truth))));
+    }
+    // The Bernstein forms of both programs agree on a box.
+    Box<S> box{std::vector<S>(std::size_t(n), S(-1)), std::vector<S>(std::size_t(n), S(1.5))};
+    const Bernstein<S> a = e.toBernstein(box);
+    const Bernstein<S> b = ndc::bernsteinOfTape(written, box);
+    REQUIRE(a.degrees() == b.degrees());
+    double scale = 0;
+    for (const S& c : b.coefficients()) scale = std::max(scale, absD(c));
+    for (std::size_t i = 0; i < a.coefficients().size(); ++i)
+      CHECK(absD(S(a.coefficients()[i] - b.coefficients()[i])) <= 1e-12 * std::max(1.0, scale));
+  }
+}
+
+TEST_CASE("Expression: short or expanding programs stay as written", "[expression]") {
+  const std::vector<std::string> v = {"x", "y", "z"};
+  // Hand-written: kept, with its natural interval extension.
+  const Expression sphere = Expression::parse("x*x + y*y + z*z - 1", v);
+  CHECK(sphere.tape().ops().size() == sphere.writtenInstructions());
+  // A short power whose expansion is long: kept.
+  const std::string power = "(x + y + z + 1)^12 + " + std::string(100, '0') + "*x";
+  const Expression p = Expression::parse(power, v);
+  CHECK(p.tape().ops().size() == p.writtenInstructions());
+  // A quotient by 3 has no finite decimal: kept, and still right.
+  std::string third;
+  for (int i = 0; i < 200; ++i) third += (i ? " + " : "") + std::string("x*y/3");
+  const Expression t = Expression::parse(third, v);
+  CHECK(t.tape().ops().size() == t.writtenInstructions());
+  CHECK(t.evaluate<double>(std::vector<double>{1.5, 2, 0}) == Approx(200.0));
+  // 5,000 copies of x*y*z: one monomial, 5000*x*y*z, 5 instructions.
+  std::string copies;
+  for (int i = 0; i < 5000; ++i) copies += (i ? " + " : "") + std::string("x*y*z");
+  const Expression c = Expression::parse(copies + " - 1", v);
+  CHECK(c.tape().ops().size() == 9);  // 5e3 x mul y mul z mul 1 sub
+  CHECK(c.writtenInstructions() > 20000);
+  CHECK(c.tape().constants().front().literal == "5e3");
+  CHECK(c.evaluate<double>(std::vector<double>{0.1, 0.2, 0.5}) == Approx(5000 * 0.01 - 1));
+}
+
+TEST_CASE("Expression: chains of powers fold without recursion", "[expression]") {
+  const std::vector<std::string> v = {"x", "y"};
+  std::mt19937 rng(7);
+  for (int length : {1, 2, 10, 1000, 50000}) {
+    // x^1^1^...^1 is x; x^2^1^...^1 is x^2; x^2^3^2 is x^512 (right associative).
+    std::string ones;
+    for (int i = 0; i < length; ++i) ones += "^1";
+    CHECK(Expression::parse("x" + ones + " + y", v).degrees() == std::vector<int>{1, 1});
+    CHECK(Expression::parse("x^2" + ones + " + y", v).degrees() == std::vector<int>{2, 1});
+    CHECK(Expression::parse("x^(3" + ones + ")^2 - y", v).degrees() == std::vector<int>{9, 1});
+    // 1^2^...: 1; 0^...^0 alternates.
+    CHECK(Expression::parse("x^1^2" + ones + " - y", v).degrees() == std::vector<int>{1, 1});
+  }
+  CHECK(Expression::parse("x^2^3^2 - y", v).degrees() == std::vector<int>{512, 1});
+  CHECK(Expression::parse("x^0^0 - y", v).degrees() == std::vector<int>{1, 1});  // 0^0 = 1
+  CHECK(Expression::parse("x^2^0^5 - y", v).degrees() == std::vector<int>{1, 1});
+  // Past the cap, with the chain's column.
+  try {
+    Expression::parse("y + x^2^3^2^2", v);
+    FAIL("no error");
+  } catch (const ExpressionError& e) {
+    CHECK(e.column() == 7);
+    CHECK(std::string(e.what()).find("exponent too large") != std::string::npos);
+  }
 }

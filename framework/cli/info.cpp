@@ -32,7 +32,18 @@ void printInfo(const Problem& p, std::ostream& out) {
   out << "equations:\n";
   for (int i = 0; i < p.m(); ++i) {
     const Expression& e = p.equations[i];
-    out << "  " << i + 1 << ": " << e.text() << '\n' << "     degrees:";
+    // A generated equation can be megabytes long: its head, and its length.
+    constexpr std::size_t kShown = 400;
+    out << "  " << i + 1 << ": ";
+    if (e.text().size() <= kShown)
+      out << e.text();
+    else
+      out << e.text().substr(0, kShown) << " ... (" << e.text().size() << " characters)";
+    out << '\n';
+    if (e.writtenInstructions() != e.tape().ops().size())
+      out << "     program: " << e.tape().ops().size() << " instructions (like terms collected; "
+          << e.writtenInstructions() << " as written)\n";
+    out << "     degrees:";
     // The tensor-product Bernstein patch has prod(d_j + 1) coefficients.
     const std::vector<int> degrees = e.degrees();
     std::uint64_t count = 1;

@@ -4,11 +4,13 @@
 
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "framework/core/canonical.hpp"
 #include "framework/core/parser.hpp"
 
 namespace ndc {
@@ -28,6 +30,9 @@ void checkDomain(const Expression& e, int dim) {
                                 std::to_string(dim) + ", expected " + std::to_string(e.dim()));
 }
 
+/// Programs of at most this many instructions are kept as written: a hand-written equation.
+constexpr std::size_t kCanonicalAbove = 64;
+
 /// A program of one operand instruction.
 std::shared_ptr<const Tape> single(int dim, const TapeOp& op) {
   auto tape = std::make_shared<Tape>(dim);
@@ -45,7 +50,17 @@ Expression::Expression() : text_("0") {
 
 Expression Expression::parse(std::string_view text, std::span<const std::string> variables) {
   Expression e;
-  e.tape_ = std::make_shared<const Tape>(parseExpression(text, variables));
+  Tape tape = parseExpression(text, variables);
+  // Compiled once: the canonical program (like terms collected) when it is at most half as
+  // long, so a generated equation costs its coefficients, not its text (canonical.hpp). A
+  // short hand-written program stays as written, with its natural interval extension.
+  const std::size_t ops = tape.ops().size();
+  e.written_ = ops;
+  if (ops > kCanonicalAbove)
+    if (std::optional<Tape> canonical = canonicalTape(tape, canonicalLimitsFor(ops));
+        canonical && 2 * canonical->ops().size() <= ops)
+      tape = std::move(*canonical);
+  e.tape_ = std::make_shared<const Tape>(std::move(tape));
   e.dim_ = static_cast<int>(variables.size());
   e.text_ = std::string(text);
   return e;
@@ -165,8 +180,7 @@ Bernstein<S> Expression::toBernstein(const Box<S>& domain) const {
   return bernsteinOfTape(*tape_, domain);
 }
 
-Bernstein<double> Expression::toBernstein(const Box<double>& domain,
-                                          double& roundingError) const {
+Bernstein<double> Expression::toBernstein(const Box<double>& domain, double& roundingError) const {
   checkDomain(*this, domain.dim());
   return bernsteinOfTape(*tape_, domain, roundingError);
 }

@@ -63,6 +63,9 @@ class Expression {
   const std::shared_ptr<const Tape>& sharedTape() const { return tape_; }
   /// Degree in each variable (an upper bound from the program: cancellation is ignored).
   std::vector<int> degrees() const;
+  /// Instructions of the program as the text was written; tape().ops().size() is smaller when
+  /// parse() kept the canonical program (like terms collected, canonical.hpp).
+  std::size_t writtenInstructions() const { return written_ ? written_ : tape_->ops().size(); }
 
   /// Value at a point.
   template <class S>
@@ -90,6 +93,7 @@ class Expression {
   static Expression join(TapeOp::Kind kind, const char* op, const Expression& a,
                          const Expression* b);
   int dim_ = 0;
+  std::size_t written_ = 0;  ///< instructions as written (0: those of tape_)
   std::string text_;
   std::shared_ptr<const Tape> tape_;
 };

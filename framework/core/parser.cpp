@@ -67,12 +67,9 @@ void compile(const ExprNode& node, Tape& tape) {
   using K = ExprNode::Kind;
   using Op = TapeOp::Kind;
   switch (node.kind) {
-    case K::kNumber: {
-      const Interval<double> enclosure = Interval<double>::fromString(node.literal);
-      tape.pushConstant({node.literal, std::strtod(node.literal.c_str(), nullptr),
-                         enclosure.lower(), enclosure.upper()});
+    case K::kNumber:
+      tape.pushConstant(TapeConstant::fromLiteral(node.literal));
       return;
-    }
     case K::kVariable:
       tape.push({Op::kVariable, node.variable});
       return;
@@ -104,7 +101,8 @@ void compile(const ExprNode& node, Tape& tape) {
 //   term       := unary (('*' | '/') unary)*
 //   unary      := ('-' | '+') unary | power
 //   power      := primary ('^' exponent)?
-//   exponent   := (INTEGER | '(' exponent ')') ('^' exponent)?
+//   exponent   := atom ('^' atom)*       (right associative, folded)
+//   atom       := INTEGER | '(' exponent ')'
 //   primary    := NUMBER | VARIABLE | '(' expression ')'
 class Parser {
  public:
@@ -301,7 +299,36 @@ class Parser {
     return node;
   }
 
+  /// exponent := atom ('^' atom)*, folded from the right (a^b^c = a^(b^c)) without recursion:
+  /// a chain of 50,000 carets is input, not a reason to overflow the stack.
   long exponent() {
+    const std::size_t start = pos_;
+    std::vector<long> chain{exponentAtom()};
+    for (;;) {
+      skipSpace();
+      if (peek() != '^') break;
+      ++pos_;
+      chain.push_back(exponentAtom());
+    }
+    long value = chain.back();
+    for (std::size_t i = chain.size() - 1; i-- > 0;) value = foldPower(chain[i], value, start);
+    return value;
+  }
+
+  /// base^power for the exponent's fold, failing past kMaxExponent.
+  long foldPower(long base, long power, std::size_t start) const {
+    long folded = 1;
+    for (long k = 0; k < power; ++k) {
+      folded *= base;
+      if (folded > kMaxExponent)
+        fail(start, "exponent too large (at most " + std::to_string(kMaxExponent) + ")");
+      if (folded == 0 || folded == 1) break;
+    }
+    return folded;
+  }
+
+  /// INTEGER | '(' exponent ')'
+  long exponentAtom() {
     skipSpace();
     std::size_t start = pos_;
     long value = 0;
@@ -331,20 +358,6 @@ class Parser {
       fail(pos_, "unexpected end of expression: expected an exponent after '^'");
     } else {
       fail(pos_, "the exponent must be a non-negative integer literal");
-    }
-    // Right associativity: a^b^c = a^(b^c), folded here.
-    skipSpace();
-    if (peek() == '^') {
-      ++pos_;
-      long outer = exponent();
-      long folded = 1;
-      for (long k = 0; k < outer; ++k) {
-        folded *= value;
-        if (folded > kMaxExponent)
-          fail(start, "exponent too large (at most " + std::to_string(kMaxExponent) + ")");
-        if (folded == 0 || folded == 1) break;
-      }
-      value = folded;
     }
     return value;
   }

@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstdlib>
 #include <stdexcept>
+#include <utility>
 
 namespace ndc {
 
@@ -32,6 +34,12 @@ int pops(TapeOp::Kind kind) {
 }  // namespace
 
 // ---- Building ----------------------------------------------------------------------------------
+
+TapeConstant TapeConstant::fromLiteral(std::string literal) {
+  const Interval<double> enclosure = Interval<double>::fromString(literal);
+  const double value = std::strtod(literal.c_str(), nullptr);
+  return {std::move(literal), value, enclosure.lower(), enclosure.upper()};
+}
 
 template <>
 double TapeConstant::as<double>() const {
@@ -72,9 +80,8 @@ void Tape::pushConstant(TapeConstant constant) {
 }
 
 void Tape::pushLeaf(const TapeLeaf& leaf) {
-  const auto it = std::find_if(leaves_.begin(), leaves_.end(), [&](const TapeLeaf& l) {
-    return l.polynomial == leaf.polynomial;
-  });
+  const auto it = std::find_if(leaves_.begin(), leaves_.end(),
+                               [&](const TapeLeaf& l) { return l.polynomial == leaf.polynomial; });
   const auto index = static_cast<int>(it - leaves_.begin());
   if (it == leaves_.end()) leaves_.push_back(leaf);
   push({TapeOp::Kind::kLeaf, index});

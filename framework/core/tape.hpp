@@ -44,6 +44,10 @@ struct TapeConstant {
   double value = 0;
   double lower = 0, upper = 0;
 
+  /// The constant of a decimal literal (digits [. digits] [(e|E) [+|-] digits], finite as a
+  /// double): its text, nearest double and tightest double enclosure.
+  static TapeConstant fromLiteral(std::string literal);
+
   /// The literal from its text (rounded to nearest in S; the cached double for double).
   template <class S>
   S as() const;
