@@ -186,8 +186,10 @@ TEST_CASE("missing keys, unknown keys and wrong types", "[problem]") {
   checkError(problemText() + "expect = 3\n", "bad.toml:5:", "expect must be a table");
   checkError(problemText() + "[expect]\ncomponents = 1.5\n",
              "bad.toml:6:", "expect.components must be an integer, not a float");
-  checkError(problemText() + "[expect]\nnote = \"x\"\n",
-             "bad.toml:6:", "expect.note must be an integer");
+  checkError(problemText() + "[expect]\nnote = \"x\"\n", "bad.toml:6:1:",
+             "unknown key 'note' in expect (known: components, euler_characteristic, vertices");
+  checkError(problemText() + "[expect]\ngenus = \"x\"\n",
+             "bad.toml:6:", "expect.genus must be an integer");
 }
 
 TEST_CASE("names and variables", "[problem]") {

@@ -27,7 +27,7 @@ inline constexpr std::array<std::string_view, 11> kExpectKeys = {
 /// - `genus` is compared as (2 - euler_characteristic) / 2 only where that formula holds for
 ///   the mesh: k = 2, one component, no boundary or non-manifold edges, and an even Euler
 ///   characteristic (a closed connected orientable surface); otherwise it is not comparable;
-/// - any other key (e.g. `boundary_components`) is not comparable.
+/// - any other key (problem files refuse them when read) is not comparable.
 /// A key that is not comparable has ExpectCheck::notComparable set and `ok` false.
 std::vector<ExpectCheck> checkExpectation(const Expectation& expect, const MeshStats& mesh, int k);
 

@@ -14,6 +14,7 @@
 #include <set>
 #include <sstream>
 
+#include "framework/core/expectation.hpp"
 #include "framework/core/scalar.hpp"
 #include "framework/core/toml_reader.hpp"
 
@@ -340,6 +341,14 @@ Expectation TomlReader::expectOf(const toml::node& node) const {
   Expectation expect;
   for (auto&& [key, value] : *table) {
     const std::string k(key.str());
+    // An unknown key is an error, as at the top level: a misspelt expectation would otherwise
+    // never be checked.
+    if (std::find(kExpectKeys.begin(), kExpectKeys.end(), k) == kExpectKeys.end()) {
+      std::string known;
+      for (std::string_view name : kExpectKeys)
+        known += (known.empty() ? "" : ", ") + std::string(name);
+      fail(key.source(), "unknown key '" + k + "' in expect (known: " + known + ")");
+    }
     const auto* i = value.as_integer();
     if (!i) fail(value, "expect." + k + " must be an integer, not " + tomlTypeName(value));
     if (k == "components")
