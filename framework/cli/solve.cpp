@@ -59,8 +59,8 @@ std::string listText(const std::vector<double>& values, char open = '(', char cl
 }
 
 /// Warnings on standard error, one line each naming the problem file: differences from
-/// `[expect]` (and keys that could not be compared), dual vertices off M, and crossings left
-/// within rounding of a grid face.
+/// `[expect]` (and keys that could not be compared), an empty zero set, dual vertices off M,
+/// and crossings left within rounding of a grid face.
 void warn(const Problem& problem, const Summary& s, bool check) {
   const std::string& file = problem.path;
   for (const ExpectCheck& c : s.expect)
@@ -68,6 +68,9 @@ void warn(const Problem& problem, const Summary& s, bool check) {
   const Expectation& x = problem.expect;
   if (check && !x.components && !x.eulerCharacteristic && x.other.empty())
     std::cerr << file << ": --check: the problem has no [expect] to check\n";
+  if (emptyZeroSet(s))
+    std::cerr << file << ": the zero set does not meet the domain (every cell is excluded by "
+              << "its bounds): the mesh is empty\n";
   if (s.offManifoldVertices > 0)
     std::cerr << file << ": " << s.offManifoldVertices
               << " dual vertices could not be projected onto M\n";
@@ -82,8 +85,10 @@ void warn(const Problem& problem, const Summary& s, bool check) {
 }
 
 /// The one line on the topology certificate: certified, or not and why.
-void printTopology(const TopologyRecord& t) {
-  if (t.certified) {
+void printTopology(const TopologyRecord& t, bool empty) {
+  if (t.certified && empty) {
+    std::cout << "topology: certified (empty: M does not meet the domain)\n";
+  } else if (t.certified) {
     std::cout << "topology: certified (" << t.certifiedCells << " cells";
     if (t.blockCells > 0) std::cout << ", " << t.blockCells << " in blocks";
     if (t.refinedCells > 0)
@@ -123,7 +128,7 @@ void printDiagnostics(const Summary& s) {
   if (s.offManifoldVertices > 0)
     std::cout << "off-manifold vertices: " << s.offManifoldVertices
               << " (dual vertices Newton could not project onto M)\n";
-  printTopology(s.topology);
+  printTopology(s.topology, emptyZeroSet(s));
   const PerturbationRecord& q = s.perturbation;
   if (!q.level.empty() || q.attempts > 0) {
     std::cout << "general position: ";

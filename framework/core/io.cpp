@@ -9,15 +9,19 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <span>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -182,7 +186,8 @@ void jsonDiagnostics(std::ostream& o, const Summary& s) {
   o << "  \"diagnostics\": {\"ambiguous_cells\": " << s.ambiguousCells
     << ", \"singular_cells\": " << s.singularCells
     << ", \"chord_failures\": " << s.mesh.chordFailures
-    << ", \"off_manifold_vertices\": " << s.offManifoldVertices;
+    << ", \"off_manifold_vertices\": " << s.offManifoldVertices
+    << ", \"empty_zero_set\": " << (emptyZeroSet(s) ? "true" : "false");
   // Extensions (docs/contracts.md 4.5): located singular points and the crossing's perturbation.
   o << ",\n    \"singular_points\": [";
   for (std::size_t i = 0; i < s.singularPoints.size(); ++i) {
@@ -552,10 +557,27 @@ class Staging {
   explicit Staging(const std::filesystem::path& dir)
       : dir_(dir), path_(dir / (".ndcontour-partial-" + std::to_string(::getpid()))) {
     std::error_code error;
+    removeAbandoned(dir);
     std::filesystem::remove_all(path_, error);
     std::filesystem::create_directory(path_, error);
     if (error) throw InputError(dir.string() + ": cannot create a temporary folder in it");
     copyPath(cleanup.folder, path_);
+  }
+
+  /// Removes the staging folders in `dir` of runs that were killed (SIGKILL, a power cut): their
+  /// process no longer exists. A live one (a concurrent solve into `dir`) is left alone.
+  static void removeAbandoned(const std::filesystem::path& dir) {
+    constexpr std::string_view kPrefix = ".ndcontour-partial-";
+    std::error_code error;
+    for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
+      const std::string name = entry.path().filename().string();
+      if (name.rfind(kPrefix, 0) != 0) continue;
+      char* end = nullptr;
+      const long pid = std::strtol(name.c_str() + kPrefix.size(), &end, 10);
+      if (pid <= 0 || *end != '\0') continue;
+      const bool gone = ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
+      if (gone) std::filesystem::remove_all(entry.path(), error);
+    }
   }
 
   /// Writes every file into the staging folder.
@@ -597,14 +619,15 @@ std::vector<std::string> Staging::publish(const OutputFiles& files) const {
   // SIGINT, SIGTERM and the timeout are held: the previous summary goes first (the folder reads
   // as unfinished while files are replaced), and so do the previous outputs this run does not
   // write (cells.csv without --cells, input.ply and ruled.ply of an application problem,
-  // uncertified.csv of an uncertified run); summary.json last marks a finished run.
+  // uncertified.csv of an uncertified run, view.html); summary.json last marks a finished run.
   const BlockInterrupts hold;
   const auto written = [&](const std::string& name) {
     return std::any_of(files.begin(), files.end(), [&](const auto& f) { return f.first == name; });
   };
   std::error_code error;
+  // view.html is `ndcontour view`'s page of the previous run: it would show the old mesh.
   for (const char* name : {"summary.json", "cells.csv", "mesh.vtu", "mesh.obj", "input.ply",
-                           "ruled.ply", "uncertified.csv"})
+                           "ruled.ply", "uncertified.csv", "view.html"})
     if (std::string(name) == "summary.json" || !written(name)) {
       std::filesystem::remove(dir_ / name, error);
       if (error) abandon((dir_ / name).string() + ": cannot remove the previous output");

@@ -140,6 +140,10 @@ struct Summary {
   double memoryBudget = 0, estimatedMemory = 0;
 };
 
+/// Whether the run proved that M does not meet the domain: the subdivision excluded every cell
+/// by its bounds, so no solution cell is left (`diagnostics.empty_zero_set`).
+inline bool emptyZeroSet(const Summary& s) { return s.solution == 0; }
+
 /// summary.json text (schema "ndcontour.summary/1"), field names exactly as docs/contracts.md 4.3.
 std::string toJson(const Summary& summary);
 
