@@ -21,6 +21,7 @@
 #include "framework/core/parallel.hpp"
 #include "framework/core/scalar.hpp"
 #include "framework/core/system.hpp"
+#include "framework/pipeline/rank.hpp"
 #include "framework/pipeline/singular.hpp"
 #include "strategies/bounding/bounding.hpp"
 #include "strategies/classification/classification.hpp"
@@ -553,6 +554,8 @@ RunResult run(const Problem& problem, const Settings& settings, const StrategyCh
   // Alg. 1: project each cell's centroid onto M, then classify the cell.
   auto t = Clock::now();
   const Projections<S> projections = projectCells<S>(projection, cells, domain, progress);
+  // Dependent equations make M thicker than k: say so now, before the connection's work.
+  checkRankOnM<S>(problem, system, projections);
   const std::vector<CellClass> classes =
       classifyCells<S>(classification, cells, domain, projections);
   summary.tProjection = secondsSince(t);
