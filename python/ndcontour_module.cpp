@@ -8,12 +8,18 @@
 
 #include <toml++/toml.h>
 
+#include <chrono>
 #include <cstdint>
+#include <exception>
+#include <future>
+#include <limits>
 #include <memory>
+#include <mutex>
 #include <new>
 #include <optional>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "framework/applications/load.hpp"
@@ -22,6 +28,7 @@
 #include "framework/core/expectation.hpp"
 #include "framework/core/io.hpp"
 #include "framework/core/result.hpp"
+#include "framework/core/stop.hpp"
 #include "framework/core/summary.hpp"
 #include "framework/pipeline/pipeline.hpp"
 
@@ -107,8 +114,13 @@ struct Result {
   py::dict summary() const {
     return py::module_::import("json").attr("loads")(ndc::toJson(run->summary));
   }
-  std::vector<std::string> write(const std::string& dir, bool ascii, bool cells, bool vtk,
+  std::vector<std::string> write(const py::object& dirArg, bool ascii, bool cells, bool vtk,
                                  bool obj) const {
+    // A str or any os.PathLike, as solve() takes.
+    if (!py::isinstance<py::str>(dirArg) && !py::hasattr(dirArg, "__fspath__"))
+      throw py::type_error("write(): dir must be a str or an os.PathLike, not " +
+                           py::str(dirArg.get_type().attr("__name__")).cast<std::string>());
+    const std::string dir = py::module_::import("os").attr("fspath")(dirArg).cast<std::string>();
     ndc::OutputOptions output;
     output.format = ascii ? ndc::PlyFormat::ascii : ndc::PlyFormat::binary;
     output.cells = cells;
@@ -124,66 +136,200 @@ struct Result {
   }
 };
 
-/// `threads`: 1..kMaxThreads, as `--threads` accepts (the CLI checks it while parsing).
-int threadsOf(const py::handle& value) {
-  const std::string text = py::str(value).cast<std::string>();
-  if (!py::isinstance<py::int_>(value) || py::isinstance<py::bool_>(value) ||
-      value.cast<long long>() < 1 || value.cast<long long>() > ndc::cli::kMaxThreads)
-    throw ndc::UsageError("--threads: '" + text + "' is not an integer in 1.." +
-                          std::to_string(ndc::cli::kMaxThreads));
-  return value.cast<int>();
+/// The Python type name of `value`.
+std::string typeName(const py::handle& value) {
+  return py::str(value.get_type().attr("__name__")).cast<std::string>();
 }
 
-/// The CLI's settings and checks for the keyword arguments of solve().
-ndc::cli::SolveOptions optionsOf(const py::kwargs& kwargs) {
+/// `value` as an integer option: an int (not a bool, which Python counts as one); anything else
+/// is a TypeError naming the option.
+long long integerOption(const std::string& name, const py::handle& value) {
+  if (!py::isinstance<py::int_>(value) || py::isinstance<py::bool_>(value))
+    throw py::type_error("solve(): " + name + " must be an int, not " + typeName(value));
+  try {
+    return value.cast<long long>();
+  } catch (const py::cast_error&) {
+    throw ndc::UsageError("solve(): " + name + " = " + py::str(value).cast<std::string>() +
+                          " is out of range");
+  }
+}
+
+/// `value` as a real option: an int or a float (not a bool).
+double realOption(const std::string& name, const py::handle& value) {
+  if ((!py::isinstance<py::int_>(value) && !py::isinstance<py::float_>(value)) ||
+      py::isinstance<py::bool_>(value))
+    throw py::type_error("solve(): " + name + " must be a float, not " + typeName(value));
+  return value.cast<double>();
+}
+
+/// `value` as a string option.
+std::string stringOption(const std::string& name, const py::handle& value) {
+  if (!py::isinstance<py::str>(value))
+    throw py::type_error("solve(): " + name + " must be a str, not " + typeName(value));
+  return value.cast<std::string>();
+}
+
+/// An integer option in [lo, hi], as the CLI spells the range error.
+int boundedOption(const std::string& name, const py::handle& value, long long lo, long long hi) {
+  const long long v = integerOption(name, value);
+  if (v < lo || v > hi)
+    throw ndc::UsageError("solve(): " + name + " = " + std::to_string(v) + " is not in " +
+                          std::to_string(lo) + ".." + std::to_string(hi));
+  return static_cast<int>(v);
+}
+
+/// `threads`: 1..kMaxThreads, as `--threads` accepts (the CLI checks it while parsing).
+int threadsOf(const py::handle& value) {
+  const long long v = integerOption("threads", value);
+  if (v < 1 || v > ndc::cli::kMaxThreads)
+    throw ndc::UsageError("--threads: '" + std::to_string(v) + "' is not an integer in 1.." +
+                          std::to_string(ndc::cli::kMaxThreads));
+  return static_cast<int>(v);
+}
+
+/// The options of solve() that are not the CLI's: `timeout` (seconds, raising TimeoutError).
+struct PythonOptions {
+  std::optional<double> timeout;
+};
+
+/// The CLI's settings and checks for the keyword arguments of solve(). A value of the wrong
+/// Python type is a TypeError naming the option; a bad value of the right type an InputError
+/// with the CLI's message.
+ndc::cli::SolveOptions optionsOf(const py::kwargs& kwargs, PythonOptions& python) {
   ndc::cli::SolveOptions o;
   ndc::Settings& s = o.settings;
+  constexpr long long kIntMax = std::numeric_limits<int>::max();
   for (const auto& [key, value] : kwargs) {
     const std::string name = key.cast<std::string>();
     if (value.is_none()) continue;
     if (name == "depth")
-      s.depth = value.cast<int>();
+      s.depth = boundedOption(name, value, std::numeric_limits<int>::min(), kIntMax);
     else if (name == "max_depth")
-      s.maxDepth = value.cast<int>();
+      s.maxDepth = boundedOption(name, value, std::numeric_limits<int>::min(), kIntMax);
     else if (name == "tolerance")
-      o.tolerance = value.cast<double>();
+      o.tolerance = realOption(name, value);
     else if (name == "bounding")
-      s.bounding = value.cast<std::string>();
+      s.bounding = stringOption(name, value);
     else if (name == "subdivision")
-      s.subdivision = value.cast<std::string>();
+      s.subdivision = stringOption(name, value);
     else if (name == "projection")
-      s.projection = value.cast<std::string>();
+      s.projection = stringOption(name, value);
     else if (name == "classification")
-      s.classification = value.cast<std::string>();
+      s.classification = stringOption(name, value);
     else if (name == "connection")
-      s.connection = value.cast<std::string>();
+      s.connection = stringOption(name, value);
     else if (name == "scalar")
-      s.scalar = value.cast<std::string>();
+      s.scalar = stringOption(name, value);
     else if (name == "precision")
-      o.precision = value.cast<unsigned>();
-    else if (name == "jitter")
-      s.jitter = value.cast<std::uint64_t>();
-    else if (name == "max_memory")
+      o.precision = static_cast<unsigned>(boundedOption(name, value, 0, kIntMax));
+    else if (name == "jitter") {
+      const long long v = integerOption(name, value);
+      if (v < 0) throw ndc::UsageError("solve(): jitter must be a non-negative int");
+      s.jitter = static_cast<std::uint64_t>(v);
+    } else if (name == "max_memory") {
+      if (!py::isinstance<py::str>(value) &&
+          (!py::isinstance<py::int_>(value) || py::isinstance<py::bool_>(value)))
+        throw py::type_error("solve(): max_memory must be a str or an int, not " + typeName(value));
       o.maxMemory = py::str(value).cast<std::string>();
-    else if (name == "threads")
+    } else if (name == "threads") {
       s.threads = threadsOf(value);
-    else
-      throw ndc::UsageError("solve(): unknown keyword argument '" + name + "'");
+    } else if (name == "timeout") {
+      python.timeout = realOption(name, value);
+      if (!(*python.timeout > 0))
+        throw ndc::UsageError("solve(): timeout must be a positive number of seconds");
+    } else {
+      throw py::type_error("solve() got an unexpected keyword argument '" + name + "'");
+    }
   }
   ndc::cli::validateSolveOptions(o);
   return o;
 }
 
+/// Only one solve runs at a time in the process: the stop request (stop.hpp) is process-wide.
+std::mutex solveMutex;
+
+/// Runs `work` on a worker thread while this thread, the caller's, waits with the GIL released
+/// and takes it back every 50 ms to run Python's signal handlers: an exception one raises
+/// (KeyboardInterrupt on Ctrl-C) stops the run at its next work item and propagates from here.
+template <class Work>
+void runInterruptibly(Work&& work) {
+  std::exception_ptr failure;
+  std::promise<void> done;
+  std::future<void> finished = done.get_future();
+  std::thread worker([&] {
+    try {
+      work();
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    done.set_value();
+  });
+  bool interrupted = false;
+  for (;;) {
+    {
+      py::gil_scoped_release release;  // other Python threads run during the solve
+      if (finished.wait_for(std::chrono::milliseconds(50)) == std::future_status::ready) break;
+    }
+    if (!interrupted && PyErr_CheckSignals() != 0) {
+      interrupted = true;  // the handler's exception is set; the worker ends at its next item
+      ndc::requestStop(ndc::StopReason::kInterrupt);
+    }
+  }
+  worker.join();
+  if (interrupted) throw py::error_already_set();
+  if (failure) std::rethrow_exception(failure);
+}
+
+/// Warns (Python's `warnings`) as the CLI does on standard error: ExpectationWarning for each
+/// `[expect]` key the mesh does not match or that cannot be compared, UserWarning for an empty
+/// zero set.
+void warnAbout(const ndc::RunResult& run, const py::object& category) {
+  if (ndc::emptyZeroSet(run.summary) &&
+      PyErr_WarnEx(PyExc_UserWarning,
+                   (run.summary.problem +
+                    ": the zero set does not meet the domain (every cell is excluded by its "
+                    "bounds): the mesh is empty")
+                       .c_str(),
+                   2) != 0)
+    throw py::error_already_set();
+  for (const ndc::ExpectCheck& check : run.summary.expect) {
+    if (check.notComparable.empty() && check.ok) continue;
+    const std::string line = run.summary.problem + ": " + ndc::describeCheck(check);
+    // A filter may turn the warning into an exception ("error" action).
+    if (PyErr_WarnEx(category.ptr(), line.c_str(), 2) != 0) throw py::error_already_set();
+  }
+}
+
+py::object expectationWarning;
+
 Result solve(const py::object& problemArg, const py::kwargs& kwargs) {
-  ndc::cli::SolveOptions options = optionsOf(kwargs);
+  PythonOptions python;
+  ndc::cli::SolveOptions options = optionsOf(kwargs, python);
   const ndc::Problem problem = problemOf(problemArg);
   ndc::cli::validateSolveOptions(options, problem);
   auto run = std::make_shared<ndc::RunResult>();
   {
-    py::gil_scoped_release release;  // other Python threads run during the solve
-    *run = ndc::runPipeline(problem, options.settings);
-    run->summary.expect = ndc::checkExpectation(problem.expect, run->summary.mesh, run->k);
+    py::gil_scoped_release release;
+    const std::lock_guard<std::mutex> one(solveMutex);
+    py::gil_scoped_acquire acquire;
+    ndc::clearStop();
+    if (python.timeout)
+      ndc::setStopDeadline(std::chrono::steady_clock::now() +
+                               std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                   std::chrono::duration<double>(*python.timeout)),
+                           *python.timeout);
+    try {
+      runInterruptibly([&] {
+        *run = ndc::runPipeline(problem, options.settings);
+        run->summary.expect = ndc::checkExpectation(problem.expect, run->summary.mesh, run->k);
+      });
+    } catch (...) {
+      ndc::clearStop();
+      throw;
+    }
+    ndc::clearStop();
   }
+  warnAbout(*run, expectationWarning);
   return Result{std::move(run)};
 }
 
@@ -209,10 +355,20 @@ PYBIND11_MODULE(ndcontour, m) {
       inputError(("ndcontour: " + oneLine(e.what())).c_str());
     } catch (const ndc::InputError& e) {
       inputError(oneLine(e.what()).c_str());
+    } catch (const ndc::Stopped& e) {
+      PyErr_SetString(PyExc_TimeoutError, ("ndcontour: " + std::string(e.what())).c_str());
     } catch (const std::bad_alloc&) {
       PyErr_SetString(PyExc_MemoryError, "ndcontour: out of memory (use a smaller depth)");
     }
   });
+
+  expectationWarning = py::reinterpret_borrow<py::object>(
+      PyErr_NewExceptionWithDoc("ndcontour.ExpectationWarning",
+                                "A mesh that does not match the problem's [expect] (or a key "
+                                "that cannot be compared): warned by solve(), as the CLI "
+                                "prints it.",
+                                PyExc_UserWarning, nullptr));
+  m.attr("ExpectationWarning") = expectationWarning;
 
   py::class_<Result>(m, "Result", "The result of one solve (the outputs of `ndcontour solve`).")
       .def_property_readonly(
@@ -246,9 +402,12 @@ PYBIND11_MODULE(ndcontour, m) {
         "solve(problem, *, depth=6, max_depth=None, tolerance=None, bounding='linearized', "
         "subdivision='binary', projection='newton', classification='paper', "
         "connection='crossing', scalar='double', precision=None, jitter=None, "
-        "max_memory=None, threads=None)\n\n"
+        "max_memory=None, threads=None, timeout=None)\n\n"
         "Solves a problem: a path (str or os.PathLike), TOML text (a str with a line break) or "
         "a dict of the problem file's tables. The keywords are `ndcontour solve`'s options; "
-        "bad input raises ndcontour.InputError (a ValueError) with the CLI's message. The GIL "
-        "is released while the pipeline runs.");
+        "a value of the wrong type raises TypeError naming the option, bad input "
+        "ndcontour.InputError (a ValueError) with the CLI's message. The GIL is released while "
+        "the pipeline runs; Ctrl-C raises KeyboardInterrupt within one work item, and a run "
+        "past `timeout` seconds raises TimeoutError. A mesh that does not match the "
+        "problem's [expect] warns with ndcontour.ExpectationWarning.");
 }

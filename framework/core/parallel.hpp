@@ -21,6 +21,7 @@
 #include <utility>
 
 #include "framework/core/scalar.hpp"
+#include "framework/core/stop.hpp"
 
 namespace ndc {
 
@@ -51,13 +52,15 @@ class WorkerPrecision {
 /// parallelFor over blocks: `body(begin, end)` for disjoint ranges covering [0, count), so a
 /// task can keep its scratch for a whole block. `body` must only read shared state and write
 /// what belongs to its items; worker threads see the caller's MPFR precision; exceptions reach
-/// the caller (oneTBB cancels the rest of the loop). `grain`: the fewest items of one task.
+/// the caller (oneTBB cancels the rest of the loop), and so does Stopped when a stop is
+/// requested (stop.hpp). `grain`: the fewest items of one task.
 template <class Body>
 void parallelForBlocks(std::size_t count, Body&& body, std::size_t grain = 1) {
   if (count == 0) return;
   const unsigned bits = mpfrPrecision();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, grain),
                     [&](const tbb::blocked_range<std::size_t>& range) {
+                      checkStop();
                       const WorkerPrecision precision(bits);
                       body(range.begin(), range.end());
                     });
@@ -67,11 +70,17 @@ void parallelForBlocks(std::size_t count, Body&& body, std::size_t grain = 1) {
 /// `--threads`), in any order and on any thread (the rules of parallelForBlocks).
 template <class Body>
 void parallelFor(std::size_t count, Body&& body, std::size_t grain = 1) {
-  if (count == 1) return body(std::size_t{0});
+  if (count == 1) {
+    checkStop();
+    return body(std::size_t{0});
+  }
   parallelForBlocks(
       count,
       [&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i != end; ++i) body(i);
+        for (std::size_t i = begin; i != end; ++i) {
+          checkStop();  // a stop requested meanwhile ends the loop within one item
+          body(i);
+        }
       },
       grain);
 }
