@@ -108,7 +108,7 @@ def test_bad_problems_raise_the_cli_message(tmp_path):
         ndcontour.solve(str(tmp_path / "missing.toml"))
     with pytest.raises(ndcontour.InputError, match="not a TOML value"):
         ndcontour.solve({"name": "x", "variables": [object()]})
-    with pytest.raises(ndcontour.InputError, match="unknown keyword"):
+    with pytest.raises(TypeError, match="unexpected keyword argument 'detph'"):
         ndcontour.solve(PROBLEMS / "sphere.toml", detph=3)
 
 
@@ -168,6 +168,106 @@ def test_threads_give_the_same_mesh_and_bad_counts_raise():
     assert np.array_equal(one.vertices, two.vertices)
     assert np.array_equal(one.simplices, two.simplices)
     assert one.summary["settings"]["threads"] == 1 and two.summary["settings"]["threads"] == 2
-    for bad in (0, -1, 5000, 1.5, "two", True):
+    for bad in (0, -1, 5000):
         with pytest.raises(ndcontour.InputError, match=r"--threads: .* is not an integer in 1\.\.4096"):
             ndcontour.solve(PROBLEMS / "sphere.toml", threads=bad)
+    for bad in (1.5, "two", True):
+        with pytest.raises(TypeError, match="threads must be an int"):
+            ndcontour.solve(PROBLEMS / "sphere.toml", threads=bad)
+
+
+# ---- Reliability (issue 40): types, paths, interrupts, timeouts, warnings ----------------------
+
+OPTION_VALUES = {
+    # option: (a right value, wrong-type values)
+    "depth": (4, ["5", 4.0, True, [4]]),
+    "max_depth": (6, ["6", 6.5, False]),
+    "tolerance": (0.1, ["0.1", True, [0.1]]),
+    "bounding": ("linearized", [1, 2.0, b"linearized"]),
+    "subdivision": ("binary", [1, ["binary"]]),
+    "projection": ("newton", [0, {"a": 1}]),
+    "classification": ("paper", [1.5]),
+    "connection": ("crossing", [True]),
+    "scalar": ("double", [64]),
+    "precision": (64, ["64", 64.0]),
+    "jitter": (1, ["1", 1.0, True]),
+    "max_memory": ("1G", [1.5, True, [1]]),
+    "threads": (1, ["1", 1.0]),
+    "timeout": (60, ["60", True]),
+}
+
+
+@pytest.mark.parametrize("option", sorted(OPTION_VALUES))
+def test_every_option_of_the_wrong_type_raises_type_error_naming_it(option):
+    right, wrong = OPTION_VALUES[option]
+    for value in wrong:
+        with pytest.raises(TypeError, match=option):
+            ndcontour.solve(PROBLEMS / "circle.toml", **{option: value})
+    # The right type works (a cheap solve).
+    kwargs = {"depth": 3, option: right}
+    if option == "max_depth":
+        kwargs["depth"] = 4
+    if option == "precision":
+        kwargs["scalar"] = "mpfr"
+    ndcontour.solve(PROBLEMS / "circle.toml", **kwargs)
+
+
+def test_unknown_keyword_and_bad_values():
+    with pytest.raises(TypeError, match="unexpected keyword argument 'detph'"):
+        ndcontour.solve(PROBLEMS / "circle.toml", detph=4)
+    with pytest.raises(ndcontour.InputError, match="depth"):
+        ndcontour.solve(PROBLEMS / "circle.toml", depth=0)
+    with pytest.raises(ndcontour.InputError, match="depth"):
+        ndcontour.solve(PROBLEMS / "circle.toml", depth=2**40)
+    with pytest.raises(ndcontour.InputError, match="timeout"):
+        ndcontour.solve(PROBLEMS / "circle.toml", timeout=-1)
+
+
+def test_write_takes_path_likes(tmp_path):
+    r = ndcontour.solve(PROBLEMS / "circle.toml", depth=3)
+    written = r.write(tmp_path / "as-path")
+    assert all(pathlib.Path(f).exists() for f in written)
+    with pytest.raises(TypeError, match="dir"):
+        r.write(3)
+
+
+def test_timeout_raises_timeout_error_promptly():
+    start = time.perf_counter()
+    with pytest.raises(TimeoutError, match="timeout"):
+        ndcontour.solve(PROBLEMS / "torus.toml", depth=9, timeout=0.5)
+    assert time.perf_counter() - start < 10
+    # The next solve runs normally: the stop is cleared.
+    assert ndcontour.solve(PROBLEMS / "circle.toml", depth=3).summary["mesh"]["components"] == 1
+
+
+def test_ctrl_c_interrupts_a_solve_promptly():
+    """SIGINT during a long solve raises KeyboardInterrupt within a second or so."""
+    import signal
+    timer = threading.Timer(0.5, lambda: signal.raise_signal(signal.SIGINT))
+    start = time.perf_counter()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            ndcontour.solve(PROBLEMS / "torus.toml", depth=9)
+    finally:
+        timer.cancel()
+    assert time.perf_counter() - start < 10
+    assert ndcontour.solve(PROBLEMS / "circle.toml", depth=3).summary["mesh"]["components"] == 1
+
+
+def test_expect_mismatch_and_empty_zero_set_warn():
+    wrong = {"name": "wrong", "variables": ["x", "y"], "domain": [[-2, 2], [-2, 2]],
+             "equations": ["x^2 + y^2 - 1"], "expect": {"components": 2}}
+    with pytest.warns(ndcontour.ExpectationWarning, match="expect components = 2, got 1"):
+        ndcontour.solve(wrong, depth=4)
+    right = dict(wrong, expect={"components": 1})
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ndcontour.solve(right, depth=4)
+    empty = {"name": "empty", "variables": ["x", "y", "z", "w"], "domain": [[-1, 1]] * 4,
+             "equations": ["x*z - y*w - 5", "x - y"]}
+    with pytest.warns(UserWarning, match="does not meet the domain"):
+        r = ndcontour.solve(empty, depth=3)
+    assert r.summary["diagnostics"]["empty_zero_set"] is True
+    assert len(r.vertices) == 0 and r.summary["topology"]["certified"] is True
