@@ -102,6 +102,13 @@ struct Result {
     const auto rows = static_cast<py::ssize_t>(run->vertices.size() / std::max(1, run->n));
     py::array_t<double> out({rows, static_cast<py::ssize_t>(run->n)});
     std::copy(run->vertices.begin(), run->vertices.end(), out.mutable_data());
+    // B-spline variables: the knot parameters of mesh.ply's u columns, not span coordinates.
+    if (run->application) {
+      double* v = out.mutable_data();
+      for (py::ssize_t r = 0; r < rows; ++r)
+        for (int j = 0; j < run->n; ++j)
+          v[r * run->n + j] = run->application->parameter(j, v[r * run->n + j]);
+    }
     return out;
   }
   py::array_t<std::int64_t> simplices() const {

@@ -1,6 +1,6 @@
 // The whole pipeline (docs/algorithm1.md, paper Algorithm 1) on known manifolds: every strategy
-// runs on every example problem and every combination on some, the cell counts add up, double and MPFR agree on
-// the cells and their classes, and the vertices lie on M to working precision.
+// runs on every example problem and every combination on some, the cell counts add up, double and
+// MPFR agree on the cells and their classes, and the vertices lie on M to working precision.
 #include <catch2/catch.hpp>
 
 #include <algorithm>

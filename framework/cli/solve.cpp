@@ -148,7 +148,11 @@ void printDiagnostics(const Summary& s) {
 /// was reached) reported as bad input that names the budget.
 RunResult solveWithin(const Problem& problem, const Settings& settings) {
   try {
-    return runPipeline(problem, settings, terminalProgress());
+    // A long run says so before its work (a progress bar may be on the line: start anew).
+    const Notice notice = [](const std::string& line) {
+      std::cerr << (::isatty(STDERR_FILENO) ? "\n" : "") << line << std::endl;
+    };
+    return runPipeline(problem, settings, terminalProgress(), notice);
   } catch (const std::bad_alloc&) {
     const double budget = static_cast<double>(settings.maxMemoryBytes ? settings.maxMemoryBytes
                                                                       : defaultMemoryBudget());

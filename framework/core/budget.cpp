@@ -49,6 +49,19 @@ std::uint64_t defaultMemoryBudget() {
   return static_cast<std::uint64_t>(kDefaultMemoryShare * total);
 }
 
+double workPerCell(const Problem& problem) {
+  double work = 0;
+  for (const Expression& e : problem.equations) {
+    double coefficients = 1, span = 0;
+    for (int d : e.degrees()) {
+      coefficients *= d + 1.0;
+      span += d + 1.0;
+    }
+    work += coefficients * span;
+  }
+  return work;
+}
+
 double bytesPerSolutionCell(int n, int k, const std::string& scalar, unsigned precisionBits) {
   // Measured peak RSS per solution cell (torus, spheres, circles and tori in R^2..R^8, depths
   // where the cells dominate): 330-600 bytes in double for n <= 6, growing with n; the model

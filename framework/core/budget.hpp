@@ -10,6 +10,8 @@
 #include <optional>
 #include <string>
 
+#include "framework/core/problem.hpp"
+
 namespace ndc {
 
 /// The share of the machine's memory a run may use when `--max-memory` is not given.
@@ -27,6 +29,29 @@ double bytesPerSolutionCell(int n, int k, const std::string& scalar, unsigned pr
 
 /// Bytes a run holds whatever its size (the program, the problem's Bernstein forms, buffers).
 double baseRunBytes(int n);
+
+/// The time model (docs/input-limits.md, "Time"): the operations a run spends per solution
+/// cell, dominated by restricting each equation's Bernstein form to the cell (de Casteljau along
+/// each axis): the sum over equations of coefficients x (sum of degrees + n).
+double workPerCell(const Problem& problem);
+
+/// Seconds per unit of workPerCell per solution cell for a whole run on this build (two
+/// threads), measured: the torus at depth 8 (3.5e5 cells of 1875 units, 5.9 s) and x^512 +
+/// y^2 + z^2 - 1 at depth 3 (512 cells of 2.4e6 units, 10.9 s) both give 9e-9.
+inline constexpr double kSecondsPerWork = 9e-9;
+
+/// The refinement of the crossing connection spends at most this many seconds of the time model
+/// on its solution leaves (their count times workPerCell times kSecondsPerWork): for the usual
+/// degrees the leaf budget binds long before (65,536 torus leaves are 1.1 s of it).
+inline constexpr double kRefineSeconds = 60;
+
+/// A run estimated (cells x workPerCell x kSecondsPerWork) to take longer than this many
+/// seconds is announced before its work (`solve` prints the estimate on standard error).
+inline constexpr double kAnnounceSeconds = 60;
+
+/// A run estimated to take more than this many times its `--timeout` is refused before its
+/// work (the estimate is a model, so a run near its limit is left to the timeout).
+inline constexpr double kRefuseOverTimeout = 10;
 
 /// A byte count as `--max-memory` accepts it: a positive number with an optional suffix K, M, G
 /// or T (powers of 1024, optionally followed by "B" or "iB": `512M`, `1.5G`, `16GiB`); nullopt

@@ -221,7 +221,8 @@ void jsonExtensions(std::ostream& o, const Summary& s) {
   // The run's budgets (docs/input-limits.md) and the memory it was estimated to need.
   o << ",\n  \"budget\": {\"max_memory_bytes\": " << number(s.memoryBudget)
     << ", \"estimated_memory_bytes\": " << number(s.estimatedMemory) << ", \"timeout_s\": "
-    << (s.settings.timeoutSeconds ? number(*s.settings.timeoutSeconds) : "null") << "}";
+    << (s.settings.timeoutSeconds ? number(*s.settings.timeoutSeconds) : "null")
+    << ", \"estimated_time_s\": " << number(s.estimatedSeconds) << "}";
   // The problem's [expect] compared with the mesh, when it has one (docs/contracts.md 4.5).
   if (!s.expect.empty()) {
     o << ",\n  \"expect\": {";
@@ -370,12 +371,16 @@ void writeCellsCsv(std::ostream& out, const RunResult& r) {
   out << ",class";
   for (int j = 0; j < r.n; ++j) out << ",p" << j;
   out << '\n';
+  // Centres and points in the documented coordinates: knot parameters for B-spline variables.
+  const auto at = [&](int j, double x) {
+    return r.application ? r.application->parameter(j, x) : x;
+  };
   for (std::size_t c = 0; c < r.cellClass.size(); ++c) {
     out << c;
     for (int j = 0; j < r.n; ++j) out << ',' << r.cellIndex[c * r.n + j];
-    for (int j = 0; j < r.n; ++j) out << ',' << number(r.cellCentre[c * r.n + j]);
+    for (int j = 0; j < r.n; ++j) out << ',' << number(at(j, r.cellCentre[c * r.n + j]));
     out << ',' << className(r.cellClass[c]);
-    for (int j = 0; j < r.n; ++j) out << ',' << number(r.cellPoint[c * r.n + j]);
+    for (int j = 0; j < r.n; ++j) out << ',' << number(at(j, r.cellPoint[c * r.n + j]));
     out << '\n';
   }
 }

@@ -24,6 +24,10 @@ namespace ndc {
 /// Progress report of a long stage: `fraction` in [0, 1] of `stage` ("subdivision", ...).
 using Progress = std::function<void(const char* stage, double fraction)>;
 
+/// A one-line notice of a run before its long work (the time estimate of a long run); the CLI
+/// prints it on standard error. May be empty.
+using Notice = std::function<void(const std::string& line)>;
+
 /// Bounding: can a box contain a common zero of every F_i? A bounding strategy carries a
 /// per-box `State` down the subdivision (e.g. the Bernstein patches of the box) so that a
 /// child is derived from its parent, not from the root.

@@ -138,6 +138,9 @@ struct Summary {
   /// The memory budget of the run in bytes (`budget.max_memory_bytes`), and the memory the run
   /// was estimated to need before the projection (`budget.estimated_memory_bytes`).
   double memoryBudget = 0, estimatedMemory = 0;
+  /// The time the run was estimated to take after the subdivision (`budget.estimated_time_s`;
+  /// docs/input-limits.md, "Time").
+  double estimatedSeconds = 0;
 };
 
 /// Whether the run proved that M does not meet the domain: the subdivision excluded every cell

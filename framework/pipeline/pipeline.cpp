@@ -458,6 +458,27 @@ SolutionCells solutionCells(Summary& summary, const Problem& problem, const Sett
   return cells;
 }
 
+/// The time model once the solution cells are counted (docs/input-limits.md, "Time"): the
+/// estimate goes into the summary, a long run is announced, and one far past `--timeout` is
+/// refused before its work.
+void announceTime(Summary& summary, const Problem& problem, const Settings& settings,
+                  const Notice& notice) {
+  const double work = workPerCell(problem);
+  summary.estimatedSeconds = static_cast<double>(summary.solution) * work * kSecondsPerWork;
+  std::ostringstream line;
+  line.precision(2);
+  line << problem.path << ": depth " << settings.depth << " is estimated to take about "
+       << std::fixed << summary.estimatedSeconds << std::defaultfloat << " s (" << summary.solution
+       << " solution cells of " << work << " operations each: the equations' Bernstein forms)";
+  if (settings.timeoutSeconds &&
+      summary.estimatedSeconds > kRefuseOverTimeout * *settings.timeoutSeconds)
+    throw InputError(line.str() + ", over " + std::to_string(int(kRefuseOverTimeout)) +
+                     " times --timeout " + std::to_string(*settings.timeoutSeconds) +
+                     " s: use a smaller depth");
+  if (summary.estimatedSeconds > kAnnounceSeconds && notice)
+    notice(line.str() + "; --timeout bounds it");
+}
+
 /// Counts the normal, abnormal and failed cells.
 void countClasses(Summary& summary, const std::vector<CellClass>& classes) {
   for (CellClass c : classes) {
@@ -521,11 +542,24 @@ void imageOutputs(RunResult& result, const Problem& problem) {
         std::span<const double>(result.vertices.data() + v * problem.n(), problem.n()), &singular);
     summary.imageSingularVertices += singular;
   }
+  // B-spline variables are solved in span coordinates; the outputs speak the documented knot
+  // parameters, as mesh.ply's u columns do: the singular points and the uncertified boxes
+  // (the map is increasing, so a box stays a box). The vertices stay in span coordinates in
+  // the result and are mapped where they are written (vertex_rows.hpp, the Python module).
+  const ApplicationData& app = *problem.application;
+  for (SingularPoint& p : summary.singularPoints)
+    for (std::size_t j = 0; j < p.point.size(); ++j)
+      p.point[j] = app.parameter(static_cast<int>(j), p.point[j]);
+  for (UncertifiedCell& c : summary.topology.uncertified)
+    for (std::size_t j = 0; j < c.lo.size(); ++j) {
+      c.lo[j] = app.parameter(static_cast<int>(j), c.lo[j]);
+      c.hi[j] = app.parameter(static_cast<int>(j), c.hi[j]);
+    }
 }
 
 template <class S>
 RunResult run(const Problem& problem, const Settings& settings, const StrategyChoices& choices,
-              const Progress& progress) {
+              const Progress& progress, const Notice& notice) {
   const auto start = Clock::now();
   RunResult result;
   result.n = problem.n();
@@ -550,6 +584,7 @@ RunResult run(const Problem& problem, const Settings& settings, const StrategyCh
   const Connection connection = createConnection(choices.connection);
   const SolutionCells cells =
       solutionCells<S>(summary, problem, settings, grid, bounding, subdivision, progress);
+  announceTime(summary, problem, settings, notice);
 
   // Alg. 1: project each cell's centroid onto M, then classify the cell.
   auto t = Clock::now();
@@ -642,7 +677,8 @@ StrategyChoices parseStrategies(const Settings& settings) {
           connectionRegistry().parse(settings.connection)};
 }
 
-RunResult runPipeline(const Problem& problem, const Settings& settings, const Progress& progress) {
+RunResult runPipeline(const Problem& problem, const Settings& settings, const Progress& progress,
+                      const Notice& notice) {
   checkDepths(settings.depth, settings.maxDepth, problem.n(), problem.path);
   // The default connection builds curves and surfaces only: refuse other k before any work.
   // Every strategy spec is checked before any work (UsageError on a bad name or parameter).
@@ -671,14 +707,15 @@ RunResult runPipeline(const Problem& problem, const Settings& settings, const Pr
     throw InputError("unknown scalar '" + settings.scalar + "' (expected double or mpfr)");
   // Every parallel loop of the run uses the arena of --threads (framework/core/parallel.hpp).
   return withThreads(settings.threads, [&] {
-    if (settings.scalar == "double") return run<double>(problem, settings, choices, progress);
+    if (settings.scalar == "double")
+      return run<double>(problem, settings, choices, progress, notice);
     // The run's precision applies to this run only: restore the caller's afterwards.
     struct Restore {
       unsigned bits = mpfrPrecision();
       ~Restore() { setMpfrPrecision(bits); }
     } restore;
     setMpfrPrecision(settings.precisionBits);
-    return run<Mpfr>(problem, settings, choices, progress);
+    return run<Mpfr>(problem, settings, choices, progress, notice);
   });
 }
 

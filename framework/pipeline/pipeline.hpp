@@ -47,9 +47,11 @@ StrategyChoices parseStrategies(const Settings& settings);
 
 /// Runs the whole pipeline on a problem with the given settings. Strategy names are checked
 /// first (ndc::InputError on unknown names or a depth the grid cannot hold); the scalar is
-/// chosen at run time (`settings.scalar`, `settings.precisionBits`). `progress` may be empty.
+/// chosen at run time (`settings.scalar`, `settings.precisionBits`). `progress` may be empty;
+/// `notice` gets the time estimate of a run estimated to take longer than kAnnounceSeconds,
+/// after the subdivision and before the other stages (docs/input-limits.md, "Time").
 RunResult runPipeline(const Problem& problem, const Settings& settings,
-                      const Progress& progress = {});
+                      const Progress& progress = {}, const Notice& notice = {});
 
 /// Levels below `--depth` that adaptive refinement may reach by default: genus2 at depth 5
 /// needs 6, the two circles 0.001 apart of curve-pair-close 9 (docs/certificate.md); the leaf

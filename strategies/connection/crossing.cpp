@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "framework/core/bernstein.hpp"
+#include "framework/core/budget.hpp"
 #include "framework/core/cell_forms.hpp"
 #include "framework/core/interval.hpp"
 #include "framework/core/iteration.hpp"
@@ -421,10 +422,17 @@ class AdaptiveCrossing {
   /// children that come with each solution child; at least 2 times), at most 2^22 leaves
   /// (memory). A chord error the user asks for (--tolerance) may need many more solution
   /// leaves: up to 2^22 (a few hundred MB); the CLI warns when it is not reached.
+  /// A leaf of high degree costs more (restricting a form of degree 512 costs 2.4e6
+  /// operations, a torus's 1875): the solution leaves are also capped by their work,
+  /// kRefineSeconds of the time model (budget.hpp), so x^512 + y^2 + z^2 - 1, whose forms
+  /// exclude nothing in double, stops refining at once instead of running for an hour.
   void setBudget(std::size_t baseCells, bool tolerance) {
     maxSolutionLeaves_ = std::max<std::size_t>(
         16 * baseCells, std::size_t{1} << std::max(12, 16 - 4 * (grid_.n - 3)));
     if (tolerance) maxSolutionLeaves_ = std::max<std::size_t>(maxSolutionLeaves_, kMaxLeaves);
+    const double byWork = kRefineSeconds / (workPerCell(in_.problem) * kSecondsPerWork);
+    if (byWork < static_cast<double>(maxSolutionLeaves_))
+      maxSolutionLeaves_ = static_cast<std::size_t>(std::max(byWork, 1.0));
     const std::size_t perSolutionChild = std::size_t{1} << std::max(1, n_ - k_);
     maxLeaves_ = maxSolutionLeaves_ >= kMaxLeaves / perSolutionChild
                      ? kMaxLeaves

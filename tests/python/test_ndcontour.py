@@ -271,3 +271,32 @@ def test_expect_mismatch_and_empty_zero_set_warn():
         r = ndcontour.solve(empty, depth=3)
     assert r.summary["diagnostics"]["empty_zero_set"] is True
     assert len(r.vertices) == 0 and r.summary["topology"]["certified"] is True
+
+
+def test_bspline_outputs_share_the_knot_parameters(tmp_path):
+    """Python's vertices, mesh.ply's u columns, cells.csv and uncertified.csv all use knot
+    parameters (here [0, 1], knots 0 0.5 1), not span coordinates ([0, 2]), for B-spline
+    variables."""
+    import csv
+    r = ndcontour.solve(PROBLEMS / "bisector-fig8c.toml", depth=3, max_depth=3)
+    r.write(tmp_path, ascii=True, cells=True)
+    lines = (tmp_path / "mesh.ply").read_text().splitlines()
+    header = lines[:lines.index("end_header") + 1]
+    names = [l.split()[-1] for l in header if l.startswith("property double")]
+    count = int(next(l for l in header if l.startswith("element vertex")).split()[-1])
+    rows = np.array([[float(x) for x in l.split()] for l in lines[len(header):len(header) + count]])
+    u = rows[:, [names.index("u%d" % j) for j in range(r.n)]]
+    assert np.allclose(u, r.vertices, rtol=0, atol=1e-12)
+    assert r.vertices.min() >= -1e-9 and r.vertices.max() <= 1 + 1e-9
+    assert r.vertices.max() > 0.75  # spread over the range, so span coordinates would show
+    with open(tmp_path / "cells.csv") as f:
+        for row in csv.DictReader(f):
+            for j in range(r.n):
+                assert -1e-9 <= float(row["c%d" % j]) <= 1 + 1e-9
+                # A projected point may leave its cell (and the domain) a little.
+                assert -0.25 <= float(row["p%d" % j]) <= 1.25
+    if (tmp_path / "uncertified.csv").exists():
+        with open(tmp_path / "uncertified.csv") as f:
+            for row in csv.DictReader(f):
+                for j in range(r.n):
+                    assert -1e-9 <= float(row["lo%d" % j]) <= float(row["hi%d" % j]) <= 1 + 1e-9
