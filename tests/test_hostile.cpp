@@ -11,9 +11,11 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <random>
 #include <sstream>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "tests/test_process.hpp"
 #include "tests/test_support.hpp"
@@ -335,4 +337,117 @@ TEST_CASE("hostile: a write that fails (a full disk) leaves the previous run who
   for (const auto& entry : fs::directory_iterator(out))
     after[entry.path().filename().string()] = ndc::test::slurp(entry.path());
   CHECK(after == before);  // the same files, byte for byte, and no staging folder
+}
+
+namespace {
+
+/// A problem file in x, y, z (and w for n = 4) on [-2, 2]^n with the given equations.
+fs::path system(const std::string& name, const std::vector<std::string>& equations, int n = 3) {
+  const fs::path file = scratch() / (name + ".toml");
+  std::ofstream out(file);
+  out << "name = \"" << name << "\"\nvariables = [\"x\", \"y\", \"z\"" << (n == 4 ? ", \"w\"" : "")
+      << "]\ndomain = [" << (n == 4 ? "[-2, 2], " : "") << "[-2, 2], [-2, 2], [-2, 2]]\n"
+      << "equations = [";
+  for (std::size_t i = 0; i < equations.size(); ++i)
+    out << (i ? ", " : "") << '"' << equations[i] << '"';
+  out << "]\n";
+  return file;
+}
+
+/// A decimal in [lo, hi) with two digits after the point, not 0.
+std::string decimal(std::mt19937& rng, double lo, double hi) {
+  const int cents = std::uniform_int_distribution<int>(int(lo * 100), int(hi * 100) - 1)(rng);
+  return std::to_string(cents == 0 ? 1 : cents) + "e-2";
+}
+
+}  // namespace
+
+TEST_CASE("hostile: generated dependent systems are refused early, regular ones solve",
+          "[cli][hostile]") {
+  std::mt19937 rng(40);
+  for (int trial = 0; trial < 6; ++trial) {
+    // A regular system: a sphere and a plane through its inside (a circle), or in R^4 a sphere
+    // and two planes (a circle).
+    const int n = trial % 2 ? 4 : 3;
+    const std::string r = decimal(rng, 0.8, 1.4), d = decimal(rng, -0.3, 0.3);
+    std::vector<std::string> f = {
+        "x^2 + y^2 + z^2" + std::string(n == 4 ? " + w^2" : "") + " - " + r + "^2",
+        decimal(rng, 0.5, 1.5) + "*x + " + decimal(rng, 0.5, 1.5) + "*y - z + " + d};
+    if (n == 4) f.push_back("w - " + decimal(rng, -0.3, 0.3) + "*x");
+    // Random combinations G = A F: full rank, then rank m - 1 (the last row a multiple of
+    // the sum of the others, in exact decimals).
+    const auto combination = [&](const std::vector<std::string>& weights) {
+      std::string g;
+      for (std::size_t j = 0; j < f.size(); ++j)
+        g += (j ? " + " : "") + weights[j] + "*(" + f[j] + ")";
+      return g;
+    };
+    std::vector<std::vector<std::string>> a(f.size(), std::vector<std::string>(f.size()));
+    for (auto& row : a)
+      for (auto& w : row) w = decimal(rng, 0.2, 2.0);
+    std::vector<std::string> regular, dependent;
+    for (const auto& row : a) regular.push_back(combination(row));
+    dependent = regular;
+    const std::string t = decimal(rng, 0.5, 3.0);
+    std::string last;
+    for (std::size_t i = 0; i + 1 < regular.size(); ++i)
+      last += (i ? " + " : "") + t + "*(" + regular[i] + ")";
+    dependent.back() = last;
+    INFO("trial " << trial << ": " << last);
+    const fs::path good = system("regular-" + std::to_string(trial), regular, n);
+    const Run run = ndcontour("solve --depth 4 " + ndc::test::quoted(good.string()));
+    INFO(run.err);
+    CHECK(run.status == 0);
+    CHECK(contains(run.out, "1 components"));
+    const fs::path bad = system("dependent-" + std::to_string(trial), dependent, n);
+    for (const char* depth : {"3", "6"})
+      refused("solve --depth " + std::string(depth), bad, "the equations are dependent on M");
+  }
+}
+
+TEST_CASE("hostile: generated empty zero sets are said, in a line and in the summary",
+          "[cli][hostile]") {
+  std::mt19937 rng(41);
+  for (int trial = 0; trial < 6; ++trial) {
+    // A sphere beyond the domain's corner, or of imaginary radius; and a plane.
+    const std::string c = decimal(rng, 2.5, 4.0);
+    const std::string sphere =
+        trial % 2 ? "(x - " + c + ")^2 + (y - " + c + ")^2 + z^2 - 1" : "x^2 + y^2 + z^2 + " + c;
+    const fs::path file = system("empty-" + std::to_string(trial), {sphere, "x - y"});
+    const Run run = ndcontour("solve --depth 4 --json " + ndc::test::quoted(file.string()));
+    INFO(run.err);
+    CHECK(run.status == 0);
+    CHECK(contains(run.err, file.string() + ": the zero set does not meet the domain"));
+    CHECK(contains(run.out, "\"empty_zero_set\": true"));
+    CHECK(contains(run.out, "\"vertices\": 0"));
+  }
+  // Not empty: no such line, and the field false.
+  const fs::path file = system("not-empty", {"x^2 + y^2 + z^2 - 1", "x - y"});
+  const Run run = ndcontour("solve --depth 4 --json " + ndc::test::quoted(file.string()));
+  CHECK(run.status == 0);
+  CHECK(run.err.empty());
+  CHECK(contains(run.out, "\"empty_zero_set\": false"));
+}
+
+TEST_CASE("hostile: power chains, long sums and deep products cost their coefficients",
+          "[cli][hostile]") {
+  // x^1^1^...^1 with 50,000 carets is x: solved (it overflowed the stack in info and solve).
+  const fs::path chain = problem("chain", "x" + repeat("^1", 50000) + " + y^2 - 1");
+  for (const char* command : {"info", "solve --depth 4"}) {
+    const Run run = ndcontour(std::string(command) + " " + ndc::test::quoted(chain.string()));
+    INFO(run.err);
+    CHECK(run.status == 0);
+  }
+  // A 1 MB sum of 166,666 copies of x*y: compiled to 166666*x*y - 1, 7 instructions.
+  const fs::path sum = problem("copies", repeat("x*y + ", 166665) + "x*y - 1");
+  const Run info = ndcontour("info " + ndc::test::quoted(sum.string()));
+  INFO(info.err);
+  CHECK(info.status == 0);
+  CHECK(contains(info.out, "program: 7 instructions (like terms collected; "));
+  CHECK(contains(info.out, "characters)"));  // the text is shown by its head
+  const Run solve = ndcontour("solve --depth 4 --json " + ndc::test::quoted(sum.string()));
+  CHECK(solve.status == 0);
+  CHECK(contains(solve.out, "\"components\": 2"));  // two hyperbola branches
+  // A product of 5,000 factors x: x^5000, past the degree cap (a refusal, not an hour).
+  refused("info", problem("factors", repeat("x*", 4999) + "x - y"), "at most 1000");
 }
