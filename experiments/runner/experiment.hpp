@@ -102,7 +102,7 @@ inline constexpr std::array<std::string_view, 22> kExperimentRunColumns = {
 /// flattened with dotted names. Numeric fields a later summary schema adds come after these, sorted
 /// by name; list elements (singular points, the perturbation level) and `expect` (see `expect_ok`)
 /// are left out.
-inline constexpr std::array<std::string_view, 39> kExperimentSummaryColumns = {
+inline constexpr std::array<std::string_view, 40> kExperimentSummaryColumns = {
     "cells.visited",
     "cells.solution",
     "cells.normal",
@@ -141,7 +141,8 @@ inline constexpr std::array<std::string_view, 39> kExperimentSummaryColumns = {
     "topology.reason",
     "topology.refined_cells",
     "topology.uncertified_cells",
-    "topology.block_cells"};
+    "topology.block_cells",
+    "budget.estimated_time_s"};
 
 /// Where the runs of an experiment are executed (docs/experiments.md).
 enum class Executor {
