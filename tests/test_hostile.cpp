@@ -245,6 +245,21 @@ TEST_CASE("hostile: budgets refuse what cannot fit, before the work", "[cli][hos
                               "domain = [[-2, 2], [-2, 2], [-2, 2]]\n"
                               "equations = [\"x^2 + y^2 - 1\", \"2*x^2 + 2*y^2 - 2\"]\n";
   refused("solve --depth 9", dependent, "is not a 1-manifold");
+  // Degree 512 (x^2^3^2): its cells cost 2.4e6 operations each. Depth 8 is judged by the time
+  // model from a coarse trial before its subdivision and refused as far past --timeout,
+  // within seconds; it once ran for hours.
+  const fs::path high = problem("degree-512", "x^2^3^2 + y^2 - 1", "[[-1.5, 1.5], [-1.5, 1.5]]");
+  const fs::path high3 = scratch() / "degree-512-r3.toml";
+  std::ofstream(high3) << "name = \"d\"\nvariables = [\"x\", \"y\", \"z\"]\n"
+                          "domain = [[-1.5, 1.5], [-1.5, 1.5], [-1.5, 1.5]]\n"
+                          "equations = [\"x^2^3^2 + y^2 + z^2 - 1\"]\n";
+  refused("solve --depth 8 --timeout 5", high3, "over 10 times --timeout 5 s");
+  refused("solve --depth 8 --timeout 5", high3, "estimated from");
+  // The estimate is in the summary of every run.
+  CHECK(contains(fits.out, "\"estimated_time_s\": "));
+  const Run curve = ndcontour("solve --depth 3 --json " + ndc::test::quoted(high.string()));
+  INFO(curve.err);
+  CHECK(curve.status == 0);
   // Bad budgets are usage errors, before any work.
   for (const char* bad : {"--max-memory 0", "--max-memory 12X", "--max-memory 1K",
                           "--max-memory -5G", "--timeout 0", "--timeout -1", "--timeout nan"}) {

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <iomanip>
 #include <limits>
 #include <optional>
 #include <random>
@@ -175,6 +176,67 @@ MemoryPlan planMemory(const Problem& problem, const Settings& settings, const Gr
     }
   }
   return plan;
+}
+
+/// The time model's verdict on `cells` solution cells (docs/input-limits.md, "Time estimate"):
+/// records the estimate, refuses a run over kRefuseOverTimeout times `--timeout`, and announces
+/// one over kAnnounceSeconds (once: `announced` is set). `how` says how the count is known.
+void judgeTime(Summary& summary, const Problem& problem, const Settings& settings,
+               const Notice& notice, double cells, const std::string& how, bool& announced) {
+  const double work = workPerCell(problem);
+  summary.estimatedSeconds = cells * work * kSecondsPerWork;
+  std::ostringstream line;
+  line.precision(2);
+  line << problem.path << ": depth " << settings.depth << " is estimated to take about "
+       << std::fixed << summary.estimatedSeconds << std::defaultfloat << " s (";
+  if (cells < 1e9)
+    line << std::llround(cells);
+  else
+    line << cells;
+  line << " solution cells" << how << ", of " << work
+       << " operations each: the equations' Bernstein forms)";
+  if (settings.timeoutSeconds &&
+      summary.estimatedSeconds > kRefuseOverTimeout * *settings.timeoutSeconds) {
+    line << std::defaultfloat << std::setprecision(6) << ", over " << kRefuseOverTimeout
+         << " times --timeout " << *settings.timeoutSeconds << " s: use a smaller depth";
+    throw InputError(line.str());
+  }
+  if (summary.estimatedSeconds > kAnnounceSeconds && notice && !announced) {
+    notice(line.str() + "; --timeout bounds it");
+    announced = true;
+  }
+}
+
+/// The time plan before the subdivision, which itself costs its boxes times the work per cell:
+/// where the a-priori bound on the solution cells (cellBudget) would take over kAnnounceSeconds,
+/// a trial at coarser depths counts the cells (`count(grid)`) until 2048, or for a second, and
+/// extrapolates by 2^k per level, as the memory plan does; 0 cells when no trial was needed.
+/// Returns the estimated count and how it is known.
+template <class Count>
+std::pair<double, std::string> planTime(const Problem& problem, const Settings& settings,
+                                        const Grid& grid, const Count& count) {
+  const int L = settings.depth, k = problem.k();
+  const double crude = static_cast<double>(cellBudget(problem, L));
+  if (crude * workPerCell(problem) * kSecondsPerWork <= kAnnounceSeconds) return {0.0, ""};
+  constexpr std::size_t kEnough = 2048;
+  constexpr double kTrialSeconds = 1.0;
+  const auto start = Clock::now();
+  double estimate = 0;
+  std::string how;
+  for (int depth = std::max(1, problem.rootLevel); depth < L; ++depth) {
+    Grid trial = grid;
+    trial.depth = depth;
+    std::size_t found = 0;
+    try {
+      found = count(trial);
+    } catch (const CellBudgetExceeded&) {
+      break;  // not a k-manifold: the real subdivision says so
+    }
+    estimate = static_cast<double>(found) * std::ldexp(1.0, k * (L - depth));
+    how = ", estimated from " + std::to_string(found) + " at depth " + std::to_string(depth);
+    if (found >= kEnough || secondsSince(start) > kTrialSeconds) break;
+  }
+  return {estimate, how};
 }
 
 /// ZeroSetSubdiv over the B-spline patches of a problem (Problem::roots): each patch is
@@ -425,16 +487,22 @@ void recordTopology(Summary& summary, const ConnectionOutput<S>& connected,
 template <class S>
 SolutionCells solutionCells(Summary& summary, const Problem& problem, const Settings& settings,
                             const Grid& grid, const std::optional<Bounding<S>>& bounding,
-                            const Subdivision& subdivision, const Progress& progress) {
+                            const Subdivision& subdivision, const Progress& progress,
+                            const Notice& notice) {
   // ZeroSetSubdiv at a depth, with a budget of solution cells.
   const auto subdivideAt = [&](const Grid& at, std::int64_t maxCells, const Progress& report) {
     return bounding ? subdivide<S>(*bounding, subdivision, at, report, maxCells)
                     : subdividePatches<S>(problem, settings, subdivision, at, report, maxCells);
   };
-  const MemoryPlan plan = planMemory(problem, settings, grid, [&](const Grid& at) {
+  const auto countAt = [&](const Grid& at) {
     return subdivideAt(at, cellBudget(problem, at.depth), Progress{}).size();
-  });
+  };
+  const MemoryPlan plan = planMemory(problem, settings, grid, countAt);
   summary.memoryBudget = plan.budget;
+  // A run whose cells are dear (high degree) is judged before its subdivision too.
+  bool announced = false;
+  if (const auto [early, how] = planTime(problem, settings, grid, countAt); early > 0)
+    judgeTime(summary, problem, settings, notice, early, how, announced);
 
   // The solution cells of the final depth.
   auto t = Clock::now();
@@ -455,28 +523,9 @@ SolutionCells solutionCells(Summary& summary, const Problem& problem, const Sett
   summary.tSubdivision = secondsSince(t);
   summary.visited = cells.visited;
   summary.solution = static_cast<std::int64_t>(cells.size());
+  // The exact count: the estimate the other stages are judged by.
+  judgeTime(summary, problem, settings, notice, static_cast<double>(cells.size()), "", announced);
   return cells;
-}
-
-/// The time model once the solution cells are counted (docs/input-limits.md, "Time"): the
-/// estimate goes into the summary, a long run is announced, and one far past `--timeout` is
-/// refused before its work.
-void announceTime(Summary& summary, const Problem& problem, const Settings& settings,
-                  const Notice& notice) {
-  const double work = workPerCell(problem);
-  summary.estimatedSeconds = static_cast<double>(summary.solution) * work * kSecondsPerWork;
-  std::ostringstream line;
-  line.precision(2);
-  line << problem.path << ": depth " << settings.depth << " is estimated to take about "
-       << std::fixed << summary.estimatedSeconds << std::defaultfloat << " s (" << summary.solution
-       << " solution cells of " << work << " operations each: the equations' Bernstein forms)";
-  if (settings.timeoutSeconds &&
-      summary.estimatedSeconds > kRefuseOverTimeout * *settings.timeoutSeconds)
-    throw InputError(line.str() + ", over " + std::to_string(int(kRefuseOverTimeout)) +
-                     " times --timeout " + std::to_string(*settings.timeoutSeconds) +
-                     " s: use a smaller depth");
-  if (summary.estimatedSeconds > kAnnounceSeconds && notice)
-    notice(line.str() + "; --timeout bounds it");
 }
 
 /// Counts the normal, abnormal and failed cells.
@@ -583,8 +632,7 @@ RunResult run(const Problem& problem, const Settings& settings, const StrategyCh
   const Classification classification = createClassification(choices.classification);
   const Connection connection = createConnection(choices.connection);
   const SolutionCells cells =
-      solutionCells<S>(summary, problem, settings, grid, bounding, subdivision, progress);
-  announceTime(summary, problem, settings, notice);
+      solutionCells<S>(summary, problem, settings, grid, bounding, subdivision, progress, notice);
 
   // Alg. 1: project each cell's centroid onto M, then classify the cell.
   auto t = Clock::now();
