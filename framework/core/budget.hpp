@@ -36,8 +36,9 @@ double baseRunBytes(int n);
 double workPerCell(const Problem& problem);
 
 /// Seconds per unit of workPerCell per solution cell for a whole run on this build (two
-/// threads), measured: the torus at depth 8 (3.5e5 cells of 1875 units, 5.9 s) and x^512 +
-/// y^2 + z^2 - 1 at depth 3 (512 cells of 2.4e6 units, 10.9 s) both give 9e-9.
+/// threads), measured on x^512 + y^2 + z^2 - 1 at depth 3 (512 cells of 2.4e6 units: 10.1 s);
+/// high for low degrees (the torus at depth 8, 3.5e5 cells of 1875 units: 3.7 s, 6.0 s
+/// estimated), where fixed costs per cell weigh more.
 inline constexpr double kSecondsPerWork = 9e-9;
 
 /// The refinement of the crossing connection spends at most this many seconds of the time model

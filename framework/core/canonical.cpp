@@ -52,12 +52,8 @@ std::size_t digits(const BigInt& m) {
   return static_cast<std::size_t>(static_cast<double>(msb(abs(m))) * 0.30103) + 1;
 }
 
-/// 10^p (p >= 0).
-BigInt tenTo(long p) {
-  BigInt r = 1;
-  for (long i = 0; i < p; ++i) r *= 10;
-  return r;
-}
+/// b^p (p >= 0).
+BigInt bigPower(long b, long p) { return boost::multiprecision::pow(BigInt(b), unsigned(p)); }
 
 /// The limits and the work spent so far.
 struct Budget {
@@ -78,7 +74,7 @@ Decimal add(const Decimal& a, const Decimal& b, const Budget& budget) {
   if (b.m == 0) return a;
   const long e = std::min(a.e, b.e);
   if (std::max(a.e, b.e) - e > static_cast<long>(budget.limits.maxDigits)) throw GiveUp{};
-  Decimal r{a.m * tenTo(a.e - e) + b.m * tenTo(b.e - e), e};
+  Decimal r{a.m * bigPower(10, a.e - e) + b.m * bigPower(10, b.e - e), e};
   r.normalise();
   budget.checkDigits(r.m);
   return r;
@@ -124,7 +120,7 @@ Decimal exactDouble(double v) {
   if (q >= 0) {
     d.m <<= q;
   } else {
-    for (int i = 0; i < -q; ++i) d.m *= 5;
+    d.m *= bigPower(5, -q);
     d.e = q;
   }
   if (v < 0) d.m = -d.m;
@@ -146,9 +142,7 @@ Decimal reciprocal(const Decimal& d) {
     ++fives;
   }
   if (rest != 1) throw GiveUp{};
-  BigInt m = 1;
-  for (long i = 0; i < twos; ++i) m *= 5;
-  for (long i = 0; i < fives; ++i) m *= 2;
+  const BigInt m = bigPower(5, twos) * bigPower(2, fives);
   Decimal r{d.m < 0 ? BigInt(-m) : m, -d.e - twos - fives};
   r.normalise();
   return r;
@@ -158,18 +152,25 @@ using Exponents = std::vector<int>;
 /// A sparse polynomial: exponents to nonzero coefficient.
 using Polynomial = std::map<Exponents, Decimal>;
 
-/// a += sign * b, dropping terms that cancel.
+/// a += c x^e, dropping the term when it cancels.
+void addTerm(Polynomial& a, Exponents e, const Decimal& c, const Budget& budget) {
+  auto [it, inserted] = a.try_emplace(std::move(e), c);
+  if (inserted) {
+    if (a.size() > budget.limits.maxTerms) throw GiveUp{};
+    return;
+  }
+  it->second = add(it->second, c, budget);
+  if (it->second.m == 0) a.erase(it);
+}
+
+/// a += sign * b.
 void accumulate(Polynomial& a, const Polynomial& b, bool negate, Budget& budget) {
   budget.spend(b.size());
   for (const auto& [exponents, c] : b) {
     Decimal term = c;
     if (negate) term.m = -term.m;
-    auto [it, inserted] = a.try_emplace(exponents, term);
-    if (inserted) continue;
-    it->second = add(it->second, term, budget);
-    if (it->second.m == 0) a.erase(it);
+    addTerm(a, exponents, term, budget);
   }
-  if (a.size() > budget.limits.maxTerms) throw GiveUp{};
 }
 
 Polynomial product(const Polynomial& a, const Polynomial& b, Budget& budget) {
@@ -182,8 +183,7 @@ Polynomial product(const Polynomial& a, const Polynomial& b, Budget& budget) {
         e[j] = ea[j] + eb[j];
         if (e[j] > 1000000) throw GiveUp{};
       }
-      Polynomial one{{std::move(e), multiply(ca, cb, budget)}};
-      accumulate(r, one, false, budget);
+      addTerm(r, std::move(e), multiply(ca, cb, budget), budget);
     }
   return r;
 }

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <iomanip>
 #include <limits>
+#include <map>
 #include <optional>
 #include <random>
 #include <sstream>
@@ -116,6 +117,47 @@ struct MemoryPlan {
   }
 };
 
+/// A trial subdivision at depths coarser than the run's L (the memory and the time plans): the
+/// solution cells counted at the last depth tried (`count(grid)`, memoised by the caller so the
+/// two plans share their counts), extrapolated by 2^k per level. At coarse depths the ratio per
+/// level is at most 2^k for a smooth M, so the extrapolation errs high. The trial stops at the
+/// first depth with 2048 cells, or where `enough(estimate)`, or after a second of work, or at
+/// depth L - 1. More cells than a k-manifold has at a trial depth are refused at once.
+struct CellTrial {
+  double estimate = 0;    ///< solution cells extrapolated to depth L (0: no depth tried)
+  std::size_t found = 0;  ///< solution cells at `depth`
+  int depth = 0;
+  std::string how() const {
+    return ", estimated from " + std::to_string(found) + " at depth " + std::to_string(depth);
+  }
+};
+
+template <class Count, class Enough>
+CellTrial trialCells(const Problem& problem, const Settings& settings, const Grid& grid,
+                     const Count& count, const Enough& enough) {
+  constexpr std::size_t kEnough = 2048;
+  constexpr double kTrialSeconds = 1.0;
+  const int L = settings.depth, k = problem.k();
+  const auto start = Clock::now();
+  CellTrial trial;
+  for (int depth = std::max(1, problem.rootLevel); depth < L; ++depth) {
+    Grid at = grid;
+    at.depth = depth;
+    try {
+      trial.found = count(at);
+    } catch (const CellBudgetExceeded&) {
+      Settings coarse = settings;
+      coarse.depth = depth;
+      throw InputError(notAManifold(problem, coarse, cellBudget(problem, depth)));
+    }
+    trial.depth = depth;
+    trial.estimate = static_cast<double>(trial.found) * std::ldexp(1.0, k * (L - depth));
+    if (trial.found >= kEnough || enough(trial.estimate) || secondsSince(start) > kTrialSeconds)
+      break;
+  }
+  return trial;
+}
+
 /// The memory plan of a run: its budget, and a refusal before any long work of a depth that
 /// cannot fit. A k-manifold meets about c 2^(k L) cells of the depth-L grid, so where the
 /// a-priori bound (cellBudget, and the 2^(n L) cells of the grid) does not fit the budget, a
@@ -142,39 +184,18 @@ MemoryPlan planMemory(const Problem& problem, const Settings& settings, const Gr
   const double cellsFit = std::floor((plan.budget - plan.base) / plan.perCell);
   plan.maxCells = static_cast<std::int64_t>(std::min(cellsFit, 9e18));
 
-  const int L = settings.depth, k = problem.k();
+  const int L = settings.depth;
   const double crude = std::min(static_cast<double>(cellBudget(problem, L)),
                                 std::ldexp(1.0, std::min(problem.n() * L, 1000)));
   if (plan.bytes(crude) <= plan.budget) return plan;
-  // The trial: coarse depths until the count is large enough to extrapolate from, or the
-  // extrapolation fits the budget kMargin times over (a run that clearly fits needs no finer
-  // count: the real subdivision's cap still stops one the trial underestimates), or a second of
-  // work is spent.
-  constexpr std::size_t kEnough = 2048;
+  // The trial; a run that clearly fits (kMargin times over) needs no finer count: the real
+  // subdivision's cap still stops one the trial underestimates.
   constexpr double kMargin = 64;
-  constexpr double kTrialSeconds = 1.0;
-  const auto start = Clock::now();
-  for (int depth = std::max(1, problem.rootLevel); depth < L; ++depth) {
-    Grid trial = grid;
-    trial.depth = depth;
-    std::size_t found = 0;
-    try {
-      found = count(trial);
-    } catch (const CellBudgetExceeded&) {
-      Settings at = settings;
-      at.depth = depth;
-      throw InputError(notAManifold(problem, at, cellBudget(problem, depth)));
-    }
-    const double estimate = static_cast<double>(found) * std::ldexp(1.0, k * (L - depth));
-    if (found >= kEnough || plan.bytes(kMargin * estimate) <= plan.budget || depth == L - 1 ||
-        secondsSince(start) > kTrialSeconds) {
-      if (plan.bytes(estimate) > plan.budget)
-        throw InputError(plan.overBudget(
-            problem, settings, estimate, "",
-            ", estimated from " + std::to_string(found) + " at depth " + std::to_string(depth)));
-      break;
-    }
-  }
+  const CellTrial trial = trialCells(problem, settings, grid, count, [&](double estimate) {
+    return plan.bytes(kMargin * estimate) <= plan.budget;
+  });
+  if (plan.bytes(trial.estimate) > plan.budget)
+    throw InputError(plan.overBudget(problem, settings, trial.estimate, "", trial.how()));
   return plan;
 }
 
@@ -209,34 +230,13 @@ void judgeTime(Summary& summary, const Problem& problem, const Settings& setting
 
 /// The time plan before the subdivision, which itself costs its boxes times the work per cell:
 /// where the a-priori bound on the solution cells (cellBudget) would take over kAnnounceSeconds,
-/// a trial at coarser depths counts the cells (`count(grid)`) until 2048, or for a second, and
-/// extrapolates by 2^k per level, as the memory plan does; 0 cells when no trial was needed.
-/// Returns the estimated count and how it is known.
+/// the trial's estimate; nullopt when no trial is needed.
 template <class Count>
-std::pair<double, std::string> planTime(const Problem& problem, const Settings& settings,
-                                        const Grid& grid, const Count& count) {
-  const int L = settings.depth, k = problem.k();
-  const double crude = static_cast<double>(cellBudget(problem, L));
-  if (crude * workPerCell(problem) * kSecondsPerWork <= kAnnounceSeconds) return {0.0, ""};
-  constexpr std::size_t kEnough = 2048;
-  constexpr double kTrialSeconds = 1.0;
-  const auto start = Clock::now();
-  double estimate = 0;
-  std::string how;
-  for (int depth = std::max(1, problem.rootLevel); depth < L; ++depth) {
-    Grid trial = grid;
-    trial.depth = depth;
-    std::size_t found = 0;
-    try {
-      found = count(trial);
-    } catch (const CellBudgetExceeded&) {
-      break;  // not a k-manifold: the real subdivision says so
-    }
-    estimate = static_cast<double>(found) * std::ldexp(1.0, k * (L - depth));
-    how = ", estimated from " + std::to_string(found) + " at depth " + std::to_string(depth);
-    if (found >= kEnough || secondsSince(start) > kTrialSeconds) break;
-  }
-  return {estimate, how};
+std::optional<CellTrial> planTime(const Problem& problem, const Settings& settings,
+                                  const Grid& grid, const Count& count) {
+  const double crude = static_cast<double>(cellBudget(problem, settings.depth));
+  if (crude * workPerCell(problem) * kSecondsPerWork <= kAnnounceSeconds) return std::nullopt;
+  return trialCells(problem, settings, grid, count, [](double) { return false; });
 }
 
 /// ZeroSetSubdiv over the B-spline patches of a problem (Problem::roots): each patch is
@@ -494,15 +494,18 @@ SolutionCells solutionCells(Summary& summary, const Problem& problem, const Sett
     return bounding ? subdivide<S>(*bounding, subdivision, at, report, maxCells)
                     : subdividePatches<S>(problem, settings, subdivision, at, report, maxCells);
   };
+  // The plans' trials count each coarse depth once.
+  std::map<int, std::size_t> counted;
   const auto countAt = [&](const Grid& at) {
-    return subdivideAt(at, cellBudget(problem, at.depth), Progress{}).size();
+    if (const auto it = counted.find(at.depth); it != counted.end()) return it->second;
+    return counted[at.depth] = subdivideAt(at, cellBudget(problem, at.depth), Progress{}).size();
   };
   const MemoryPlan plan = planMemory(problem, settings, grid, countAt);
   summary.memoryBudget = plan.budget;
   // A run whose cells are dear (high degree) is judged before its subdivision too.
   bool announced = false;
-  if (const auto [early, how] = planTime(problem, settings, grid, countAt); early > 0)
-    judgeTime(summary, problem, settings, notice, early, how, announced);
+  if (const auto trial = planTime(problem, settings, grid, countAt); trial && trial->depth > 0)
+    judgeTime(summary, problem, settings, notice, trial->estimate, trial->how(), announced);
 
   // The solution cells of the final depth.
   auto t = Clock::now();
@@ -577,8 +580,9 @@ void writeBack(RunResult& result, const Complex<S>& welded, const SolutionCells&
       1024);
 }
 
-/// Application problems: the image map, and where its denominator vanishes on the mesh.
-void imageOutputs(RunResult& result, const Problem& problem) {
+/// Application problems: the image map and where its denominator vanishes on the mesh, and the
+/// singular points and uncertified boxes in the documented knot parameters.
+void applicationOutputs(RunResult& result, const Problem& problem) {
   if (!problem.application) return;
   Summary& summary = result.summary;
   result.application = problem.application;
@@ -678,7 +682,7 @@ RunResult run(const Problem& problem, const Settings& settings, const StrategyCh
   checkCertificate(summary);
 
   writeBack<S>(result, welded, cells, grid, domain, projections, classes);
-  imageOutputs(result, problem);
+  applicationOutputs(result, problem);
   summary.tTotal = secondsSince(start);
   return result;
 }
