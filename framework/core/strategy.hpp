@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "framework/core/box.hpp"
+#include "framework/core/budget.hpp"
 #include "framework/core/complex.hpp"
 #include "framework/core/grid.hpp"
 #include "framework/core/problem.hpp"
@@ -82,6 +83,10 @@ struct ConnectionInput {
   /// Chord error target (`--tolerance`): leaves whose mesh pieces lie farther from M are
   /// refined too, up to maxLevel; 0: none.
   double tolerance = 0;
+  /// Seconds of the time model (budget.hpp) refinement may spend on its solution leaves:
+  /// kRefineSeconds, or a quarter of `--timeout` when that is less, so a run with a time limit
+  /// ends with an uncertified result rather than being stopped.
+  double refineSeconds = kRefineSeconds;
   /// Per equation: a bound on the rounding error of its Bernstein coefficients on the domain,
   /// relative to the largest (certificates treat smaller coefficients as unknown signs).
   std::vector<double> coefficientError;

@@ -654,6 +654,9 @@ RunResult run(const Problem& problem, const Settings& settings, const StrategyCh
   ConnectionInput<S> input{problem, system, cells, projections, classes, project, problem.k()};
   input.maxLevel = maxDepthOf(problem, settings);
   input.tolerance = settings.tolerance;
+  input.refineSeconds = settings.timeoutSeconds
+                            ? std::min(kRefineSeconds, *settings.timeoutSeconds / 4)
+                            : kRefineSeconds;
   input.refine = [&](const Box<double>& cell) {
     return refineCell<S>(problem, settings, subdivision, cell);
   };

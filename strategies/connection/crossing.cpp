@@ -389,7 +389,7 @@ class AdaptiveCrossing {
     byEvaluation_ = true;
     for (const Expression& e : in.system.equations())
       byEvaluation_ = byEvaluation_ && e.tape().leaves().empty();
-    setBudget(in.cells.size(), in.tolerance > 0);
+    setBudget(in.cells.size(), in.tolerance > 0, in.refineSeconds);
   }
 
   /// The certified mesh, refining where the certificate fails. When refinement does not reach a
@@ -424,13 +424,14 @@ class AdaptiveCrossing {
   /// leaves: up to 2^22 (a few hundred MB); the CLI warns when it is not reached.
   /// A leaf of high degree costs more (restricting a form of degree 512 costs 2.4e6
   /// operations, a torus's 1875): the solution leaves are also capped by their work,
-  /// kRefineSeconds of the time model (budget.hpp), so x^512 + y^2 + z^2 - 1, whose forms
-  /// exclude nothing in double, stops refining at once instead of running for an hour.
-  void setBudget(std::size_t baseCells, bool tolerance) {
+  /// `refineSeconds` of the time model (budget.hpp; a quarter of --timeout when that is less),
+  /// so x^512 + y^2 + z^2 - 1, whose forms exclude nothing in double, stops refining at once
+  /// instead of running for an hour.
+  void setBudget(std::size_t baseCells, bool tolerance, double refineSeconds) {
     maxSolutionLeaves_ = std::max<std::size_t>(
         16 * baseCells, std::size_t{1} << std::max(12, 16 - 4 * (grid_.n - 3)));
     if (tolerance) maxSolutionLeaves_ = std::max<std::size_t>(maxSolutionLeaves_, kMaxLeaves);
-    const double byWork = kRefineSeconds / (workPerCell(in_.problem) * kSecondsPerWork);
+    const double byWork = refineSeconds / (workPerCell(in_.problem) * kSecondsPerWork);
     if (byWork < static_cast<double>(maxSolutionLeaves_))
       maxSolutionLeaves_ = static_cast<std::size_t>(std::max(byWork, 1.0));
     const std::size_t perSolutionChild = std::size_t{1} << std::max(1, n_ - k_);
