@@ -314,6 +314,17 @@ TEST_CASE("cli: a valid solve runs the pipeline and writes its outputs", "[cli]"
   CHECK(tolerance.err.empty());
   CHECK(contains(tolerance.out, "\"depth\": 3"));
   CHECK(contains(tolerance.out, "\"tolerance\": 0.0001"));
+  // It needs a connection that refines (a capability): a spec with parameters is one, the
+  // paper's connection is not.
+  const Run tuned = ndcontour(
+      "solve " + valid + " --depth 3 --tolerance 1e-4 --connection crossing:max_face_depth=12");
+  INFO(tuned.err);
+  CHECK(tuned.status == 0);
+  const Run unrefined =
+      ndcontour("solve " + valid + " --depth 3 --tolerance 1e-4 --connection paper");
+  CHECK(unrefined.status == 2);
+  CHECK(unrefined.err ==
+        "ndcontour: --tolerance needs a connection that refines: --connection crossing\n");
   const Run plain = ndcontour("solve " + valid + " --depth 3 --json");
   CHECK(contains(plain.out, "\"tolerance\": null"));
   // Strategy parameters: the summary names the strategy and records every value used.

@@ -6,6 +6,7 @@
 #include <iostream>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "framework/applications/load.hpp"
@@ -55,6 +56,33 @@ void registerMarginClassification() {
                   return ndc::holdClassification(MarginClassification(p.real("margin")));
                 }});
 }
+
+/// A test-only connection: the crossing connection's complex and record under other
+/// capabilities, so that what the pipeline does can follow only from the capabilities.
+class BorrowedCrossing {
+ public:
+  template <class S>
+  ndc::ConnectionOutput<S> connect(const ndc::ConnectionInput<S>& input) const {
+    return ndc::CrossingConnection{}.connect(input);
+  }
+};
+
+/// Registers `name` as BorrowedCrossing with `capabilities` for the guard's lifetime (the tests
+/// that loop over the connection family must not meet it).
+class BorrowedCrossingGuard {
+ public:
+  BorrowedCrossingGuard(std::string name, ndc::Capabilities capabilities) : name_(std::move(name)) {
+    ndc::connectionRegistry().add(
+        {{name_, "Test only: the crossing connection under other capabilities.", {}, capabilities},
+         [](const ndc::Parameters&) { return ndc::holdConnection(BorrowedCrossing{}); }});
+  }
+  ~BorrowedCrossingGuard() { ndc::connectionRegistry().remove(name_); }
+  BorrowedCrossingGuard(const BorrowedCrossingGuard&) = delete;
+  BorrowedCrossingGuard& operator=(const BorrowedCrossingGuard&) = delete;
+
+ private:
+  std::string name_;
+};
 
 /// The Markdown table of each family, without test-only models (test-margin).
 std::vector<std::string> registryTables() {
@@ -182,6 +210,44 @@ TEMPLATE_TEST_CASE(
   CHECK_THROWS_WITH(ndc::runPipeline(problem, settings),
                     "classification strategy 'test-margin:margin=0.5', margin: '0.5' is not a "
                     "number in 0..0.45");
+}
+
+TEST_CASE("registry: capabilities, not names, decide what the pipeline does with a model",
+          "[registry]") {
+  const BorrowedCrossingGuard certifyingModel(
+      "test-certifying", {.certifies = true, .refines = true, .minK = 1, .maxK = 2});
+  const BorrowedCrossingGuard curvesModel(
+      "test-curves-only", {.certifies = false, .refines = false, .minK = 1, .maxK = 1});
+  const std::string problems = std::string(NDC_SOURCE_DIR) + "/experiments/problems/";
+  const ndc::Problem circle = ndc::loadProblem(problems + "circle.toml");
+  ndc::Settings settings;
+  settings.depth = 4;
+  const ndc::Summary crossing = ndc::runPipeline(circle, settings).summary;
+  REQUIRE(crossing.topology.certified);
+
+  // A model that declares it certifies keeps its own record, whatever its name.
+  settings.connection = "test-certifying";
+  const ndc::Summary certifying = ndc::runPipeline(circle, settings).summary;
+  CHECK(certifying.topology.certified);
+  CHECK(certifying.topology.reason.empty());
+  CHECK(certifying.mesh.vertices == crossing.mesh.vertices);
+
+  // The same complex from a model that does not declare it is not called certified, and the
+  // reason names the models that do.
+  settings.connection = "test-curves-only";
+  const ndc::Summary plain = ndc::runPipeline(circle, settings).summary;
+  CHECK_FALSE(plain.topology.certified);
+  CHECK(plain.topology.reason ==
+        "the test-curves-only connection does not certify topology "
+        "(crossing, test-certifying do)");
+  CHECK(plain.mesh.vertices == crossing.mesh.vertices);
+
+  // Its k range refuses a surface before any work, naming the models that build one.
+  const ndc::Problem sphere = ndc::loadProblem(problems + "sphere.toml");
+  CHECK_THROWS_WITH(ndc::runPipeline(sphere, settings),
+                    Catch::Contains("the test-curves-only connection builds k = 1; this problem "
+                                    "has k = 2 (n - m); use --connection paper, naive, crossing, "
+                                    "test-certifying"));
 }
 
 // Prints the tables for docs/adding-a-strategy.md:

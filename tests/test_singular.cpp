@@ -291,7 +291,8 @@ ndc::SingularSearch search(const Problem& problem, int depth, const ndc::Singula
       ndc::subdivide<S>(bounding, ndc::createSubdivision("binary"), grid, {});
   const ndc::Projection<S> projection = ndc::createProjection<S>("newton", system);
   const ndc::Projections<S> projections = ndc::projectCells<S>(projection, cells, domain, {});
-  return ndc::findSingularPoints<S>(problem, system, cells, projections, domain, options);
+  return ndc::findSingularPoints<S>(problem, system, projection, cells, projections, domain,
+                                    options);
 }
 
 }  // namespace

@@ -62,6 +62,15 @@ void addStrategyOption(CLI::App& app, const std::string& flag, std::string& spec
       ->type_name("NAME[:KEY=VALUE,...]");
 }
 
+/// `--tolerance` refines below the grid: UsageError unless the connection spec names a model
+/// that refines (its capabilities), naming the models that do.
+void requireRefiningConnection(const std::string& spec) {
+  const Registry<ConnectionFactory>& registry = connectionRegistry();
+  if (registry.find(registry.parse(spec).name).spec.capabilities.refines) return;
+  throw UsageError("--tolerance needs a connection that refines: --connection " +
+                   connectionsThat([](const Capabilities& c) { return c.refines; }, " or "));
+}
+
 }  // namespace
 
 CLI::Validator unsignedUpTo(std::uint64_t max) {
@@ -190,8 +199,7 @@ void validateSolveOptions(SolveOptions& o) {
 
   if (o.tolerance && !(std::isfinite(*o.tolerance) && *o.tolerance > 0))
     throw UsageError("--tolerance must be a positive finite number");
-  if (o.tolerance && s.connection != "crossing")
-    throw UsageError("--tolerance needs --connection crossing (the only one that refines)");
+  if (o.tolerance) requireRefiningConnection(s.connection);
   if (o.tolerance) s.tolerance = *o.tolerance;
   if (s.timeoutSeconds && !(*s.timeoutSeconds > 0 && *s.timeoutSeconds <= kMaxTimeoutSeconds))
     throw UsageError("--timeout must be a positive number of seconds, at most a year");

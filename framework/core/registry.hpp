@@ -60,11 +60,26 @@ class Parameters {
   std::vector<std::pair<ParameterSpec, double>> values_;
 };
 
+/// What a model can do, declared once with its spec; the pipeline, the CLI, Python and the
+/// report ask for a capability, never for a model's name. The defaults are a model that only
+/// builds a complex (the other families have no capabilities to declare).
+struct Capabilities {
+  /// Connection: proves the topology of its complex (records `topology.certified`, which the
+  /// pipeline otherwise marks as not proven).
+  bool certifies = false;
+  /// Connection: refines cells adaptively below the grid (reads ConnectionInput::refine,
+  /// maxLevel and refineSeconds), so `--max-depth` and `--tolerance` mean something.
+  bool refines = false;
+  /// Connection: the manifold dimensions k it builds, minK..maxK.
+  int minK = 1, maxK = 2;
+};
+
 /// What a registry says about one model.
 struct ModelSpec {
   std::string name;
   std::string doc;  ///< one sentence: what the model does, with the paper's words
   std::vector<ParameterSpec> parameters;
+  Capabilities capabilities = {};
 };
 
 /// A parsed strategy spec: the model's name and its parameter values.
@@ -103,6 +118,12 @@ class Registry {
   void add(Entry entry) {
     checkModelName(family_, entry.spec.name, names());
     entries_.push_back(std::move(entry));
+  }
+
+  /// Removes the model called `name` (the test tree unregisters test-only models so that the
+  /// tests which loop over a family see its own models); false when there is none.
+  bool remove(std::string_view name) {
+    return std::erase_if(entries_, [&](const Entry& e) { return e.spec.name == name; }) > 0;
   }
 
   const std::string& family() const { return family_; }

@@ -51,7 +51,17 @@ concept SubdivisionStrategy = requires(const D d, int level, int n) {
   { d.boundsAfter(level, n) } -> std::same_as<bool>;
 };
 
-/// Projection of a point onto M (in place). Models: NewtonProjection.
+/// Projection: moves a point onto M in place, and says for each equation how large a residual
+/// at x cannot be told from zero at the working precision (the singular-point search accepts its
+/// points by that tolerance, so it follows the chosen model). Models: NewtonProjection.
+template <class P, class S>
+concept ProjectionStrategy = requires(const P p, std::span<S> x, std::span<const S> at,
+                                      std::span<S> tolerance) {
+  { p.project(x) } -> std::same_as<ProjectedPoint<S>>;
+  { p.residualTolerance(at, tolerance) } -> std::same_as<void>;
+};
+
+/// Projection of a point onto M (in place), as the later stages call it.
 template <class S>
 using Projector = std::function<ProjectedPoint<S>(std::span<S> x)>;
 

@@ -468,13 +468,17 @@ void checkPiecewiseSettings(const Problem& problem, const Settings& settings) {
 /// The connection's record of the topology; a connection that does not certify says so.
 template <class S>
 void recordTopology(Summary& summary, const ConnectionOutput<S>& connected,
-                    const StrategyChoice& connection, int depth) {
+                    const ModelSpec& connection, int depth) {
   summary.topology = connected.topology;
-  if (connection.name != "crossing") {
+  if (!connection.capabilities.certifies) {
+    const std::string certifying =
+        connectionsThat([](const Capabilities& c) { return c.certifies; });
+    summary.topology.certified = false;  // whatever the model's record says
     summary.topology.baseLevel = summary.topology.maxLevel = depth;
     summary.topology.maxDepth = depth;
-    summary.topology.reason =
-        "the " + connection.name + " connection does not certify topology (crossing does)";
+    summary.topology.reason = "the " + connection.name + " connection does not certify topology (" +
+                              certifying +
+                              (certifying.find(',') == std::string::npos ? " does)" : " do)");
   }
   summary.ambiguousCells = connected.ambiguousCells;
   summary.singularCells = connected.singularCells;
@@ -663,12 +667,13 @@ RunResult run(const Problem& problem, const Settings& settings, const StrategyCh
   input.coefficientError = coefficientErrors(rounding);
   ConnectionOutput<S> connected = connect<S>(connection, input);
   summary.tConnection = secondsSince(t);
-  recordTopology<S>(summary, connected, choices.connection, settings.depth);
+  recordTopology<S>(summary, connected, connectionRegistry().find(choices.connection.name).spec,
+                    settings.depth);
 
   // Analysis on the welded mesh.
   t = Clock::now();
   summary.singularPoints =
-      findSingularPoints<S>(problem, system, cells, projections, domain).points;
+      findSingularPoints<S>(problem, system, projection, cells, projections, domain).points;
   const Complex<S> welded =
       weldAtSingularPoints<S>(connected.complex, summary.singularPoints, grid);
   // The orientation of the output's simplices beside the analysis, which reads neither them
@@ -688,6 +693,24 @@ RunResult run(const Problem& problem, const Settings& settings, const StrategyCh
   applicationOutputs(result, problem);
   summary.tTotal = secondsSince(start);
   return result;
+}
+
+/// The connection's k range (its capabilities) holds the problem's k; InputError naming the
+/// connections that do build such a k, if any, before any work.
+void checkConnectionK(const Problem& problem, const ModelSpec& connection) {
+  const int k = problem.k();
+  const Capabilities& can = connection.capabilities;
+  if (k >= can.minK && k <= can.maxK) return;
+  const std::string others =
+      connectionsThat([k](const Capabilities& c) { return k >= c.minK && k <= c.maxK; });
+  const auto range = [](const Capabilities& c) {
+    return c.minK == c.maxK ? "k = " + std::to_string(c.minK)
+                            : "k = " + std::to_string(c.minK) + ".." + std::to_string(c.maxK);
+  };
+  throw InputError(
+      problem.path + ": the " + connection.name + " connection builds " + range(can) +
+      "; this problem has k = " + std::to_string(k) + " (n - m)" +
+      (others.empty() ? ", which no connection builds yet" : "; use --connection " + others));
 }
 
 }  // namespace
@@ -735,14 +758,10 @@ StrategyChoices parseStrategies(const Settings& settings) {
 RunResult runPipeline(const Problem& problem, const Settings& settings, const Progress& progress,
                       const Notice& notice) {
   checkDepths(settings.depth, settings.maxDepth, problem.n(), problem.path);
-  // The default connection builds curves and surfaces only: refuse other k before any work.
+  // A connection builds the k its capabilities declare: refuse other k before any work.
   // Every strategy spec is checked before any work (UsageError on a bad name or parameter).
   const StrategyChoices choices = parseStrategies(settings);
-  if (choices.connection.name == "crossing" && problem.k() != 1 && problem.k() != 2) {
-    throw InputError(problem.path + ": the crossing connection supports k = 1 (curves) and k = 2 " +
-                     "(surfaces); this problem has k = " + std::to_string(problem.k()) +
-                     " (n - m); use --connection paper or naive for k >= 3");
-  }
+  checkConnectionK(problem, connectionRegistry().find(choices.connection.name).spec);
   // Cells must stay wider than the rounding of their coordinates (and than subnormal numbers),
   // or neighbouring grid planes coincide and cells collapse.
   const double eps = std::numeric_limits<double>::epsilon();

@@ -11,12 +11,12 @@
 #include <span>
 #include <unordered_map>
 #include <utility>
+#include <variant>
 
 #include "framework/core/bernstein.hpp"
 #include "framework/core/cell_forms.hpp"
 #include "framework/core/iteration.hpp"
 #include "framework/core/parallel.hpp"
-#include "strategies/projection/newton.hpp"
 
 namespace ndc {
 namespace {
@@ -89,15 +89,16 @@ struct Located {
 template <class S>
 class Search {
  public:
-  Search(const Problem& problem, const System<S>& system, const SolutionCells& cells,
-         const Projections<S>& projections, const Box<S>& domain, const SingularOptions& options)
+  Search(const Problem& problem, const System<S>& system, const Projection<S>& projection,
+         const SolutionCells& cells, const Projections<S>& projections, const Box<S>& domain,
+         const SingularOptions& options)
       : problem_(problem),
         system_(system),
+        projection_(projection),
         cells_(cells),
         projections_(projections),
         domain_(domain),
         options_(options),
-        newton_(system),
         grid_(cells.grid),
         forms_(system.equations(), cells.grid, domain,
                problem.roots.empty() ? 0 : problem.rootLevel),
@@ -164,11 +165,11 @@ class Search {
 
   const Problem& problem_;
   const System<S>& system_;
+  const Projection<S>& projection_;  // its backward-error tolerance decides acceptance
   const SolutionCells& cells_;
   const Projections<S>& projections_;
   const Box<S>& domain_;
   const SingularOptions& options_;
-  const NewtonProjection<S> newton_;  // its backward-error tolerance
   const Grid& grid_;
   CellForms<S> forms_;  // the root forms of the blocks
   const int n_, m_;
@@ -444,7 +445,7 @@ bool Search<S>::accept(const std::vector<S>& x, Located<S>& result) {
   for (int j = 0; j < n_; ++j)
     if (!(x[j] >= inLo_[j] && x[j] <= inHi_[j])) return false;
   system_.evaluate(x, f_, jac_);
-  newton_.residualTolerance(x, tol_);
+  std::visit([&](const auto& model) { model.residualTolerance(x, tol_); }, projection_);
   const S d = S(64) * eps_ * width_;
   Matrix<S> j(m_, n_), jhat(m_, n_);
   for (int i = 0; i < m_; ++i) {
@@ -638,17 +639,20 @@ std::vector<S> Search<S>::seedOf(std::size_t c) const {
 
 template <class S>
 SingularSearch findSingularPoints(const Problem& problem, const System<S>& system,
-                                  const SolutionCells& cells, const Projections<S>& projections,
-                                  const Box<S>& domain, const SingularOptions& options) {
-  return Search<S>(problem, system, cells, projections, domain, options).run();
+                                  const Projection<S>& projection, const SolutionCells& cells,
+                                  const Projections<S>& projections, const Box<S>& domain,
+                                  const SingularOptions& options) {
+  return Search<S>(problem, system, projection, cells, projections, domain, options).run();
 }
 
 template SingularSearch findSingularPoints(const Problem&, const System<double>&,
-                                           const SolutionCells&, const Projections<double>&,
-                                           const Box<double>&, const SingularOptions&);
+                                           const Projection<double>&, const SolutionCells&,
+                                           const Projections<double>&, const Box<double>&,
+                                           const SingularOptions&);
 template SingularSearch findSingularPoints(const Problem&, const System<Mpfr>&,
-                                           const SolutionCells&, const Projections<Mpfr>&,
-                                           const Box<Mpfr>&, const SingularOptions&);
+                                           const Projection<Mpfr>&, const SolutionCells&,
+                                           const Projections<Mpfr>&, const Box<Mpfr>&,
+                                           const SingularOptions&);
 
 template <class S>
 std::int64_t joinAtSingularPoints(Complex<S>& complex, const std::vector<SingularPoint>& points,

@@ -19,6 +19,7 @@
 #include "framework/core/scalar.hpp"
 #include "framework/core/summary.hpp"
 #include "framework/core/system.hpp"
+#include "strategies/projection/newton.hpp"
 
 namespace ndc {
 
@@ -100,7 +101,8 @@ struct SingularSearch {
 ///
 /// **Acceptance** of the final iterate x (all must hold):
 ///  - every `|F_i(x)| <= 64 tol_i(x) + d |grad F_i(x)| + d^2 s_i / w`, where tol_i is
-///    NewtonProjection's backward-error tolerance at the working precision, w the largest
+///    the chosen projection's backward-error tolerance (`residualTolerance`; NewtonProjection's at
+///    the working precision), w the largest
 ///    domain width and d = 64 eps w: x is within rounding of the domain size of a zero of F
 ///    (the extra terms matter only near x = 0, where tol_i vanishes with |F_i|(|x|));
 ///  - `sigma_min(^J(x)) <= tau`, tau = 1e-6 sqrt(eps / 2^-52): 1e-6 in double, about 5e-18 in
@@ -114,19 +116,23 @@ struct SingularSearch {
 /// `maxPoints` points in all. A singular curve is therefore reported as a bounded sample of
 /// points on it (about one per block it crosses), not as the whole curve.
 ///
+/// `projection` is the run's projection model (its residual tolerance decides acceptance);
 /// `domain` is the grid's domain in S (`cells.grid.domain`, jitter applied). B-spline input
 /// (`problem.roots`) is handled per patch, like the subdivision.
 template <class S>
 SingularSearch findSingularPoints(const Problem& problem, const System<S>& system,
-                                  const SolutionCells& cells, const Projections<S>& projections,
-                                  const Box<S>& domain, const SingularOptions& options = {});
+                                  const Projection<S>& projection, const SolutionCells& cells,
+                                  const Projections<S>& projections, const Box<S>& domain,
+                                  const SingularOptions& options = {});
 
 extern template SingularSearch findSingularPoints(const Problem&, const System<double>&,
-                                                  const SolutionCells&, const Projections<double>&,
-                                                  const Box<double>&, const SingularOptions&);
+                                                  const Projection<double>&, const SolutionCells&,
+                                                  const Projections<double>&, const Box<double>&,
+                                                  const SingularOptions&);
 extern template SingularSearch findSingularPoints(const Problem&, const System<Mpfr>&,
-                                                  const SolutionCells&, const Projections<Mpfr>&,
-                                                  const Box<Mpfr>&, const SingularOptions&);
+                                                  const Projection<Mpfr>&, const SolutionCells&,
+                                                  const Projections<Mpfr>&, const Box<Mpfr>&,
+                                                  const SingularOptions&);
 
 /// Joins the mesh at located singular points: the dual vertices within one cell width (on every
 /// axis) of a point are given the coordinates of the one nearest to it, so that welding makes

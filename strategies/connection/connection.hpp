@@ -4,7 +4,9 @@
 /// \ref connection for the rules and the choices made where the paper is vague.
 #pragma once
 
+#include <functional>
 #include <memory>
+#include <string>
 #include <string_view>
 #include <utility>
 #include <variant>
@@ -23,6 +25,12 @@ namespace ndc {
 /// quad, split into two triangles along its shorter diagonal.
 class NaiveConnection final {
  public:
+  /// The model's name, what it does, its parameters with their defaults and its capabilities
+  /// (defined in naive.cpp, next to the model; the family's registry lists it in one line).
+  static ModelSpec spec();
+  /// The model with a spec's parameter values.
+  static NaiveConnection create(const Parameters& parameters);
+
   /// Builds the naive complex; throws InputError unless k is 1 or 2.
   template <class S>
   ConnectionOutput<S> connect(const ConnectionInput<S>& input) const;
@@ -56,6 +64,12 @@ class PaperConnection final {
     /// abnormal cells is `n - 1 + extraLayers`.
     int extraLayers = 0;
   };
+
+  /// The model's name, what it does, its parameters with their defaults and its capabilities
+  /// (defined in paper.cpp, next to the model; the family's registry lists it in one line).
+  static ModelSpec spec();
+  /// The model with a spec's parameter values.
+  static PaperConnection create(const Parameters& parameters);
 
   PaperConnection() = default;
   explicit PaperConnection(const Options& options) : options_(options) {}
@@ -139,6 +153,12 @@ using ConnectionFactory = Connection (*)(const Parameters& parameters);
 /// The connection family's registry (strategies/connection/connection.cpp lists the models;
 /// the CLI's `--connection`). Mutable so that tests can register test-only models.
 Registry<ConnectionFactory>& connectionRegistry();
+
+/// The names of the registered connection models whose capabilities satisfy `can`, joined by
+/// `separator` ("crossing", "paper, naive"); empty when none does. For messages that name the
+/// models able to do what the chosen one cannot.
+std::string connectionsThat(const std::function<bool(const Capabilities&)>& can,
+                            std::string_view separator = ", ");
 
 /// Makes the connection a parsed spec names, with its parameters.
 Connection createConnection(const StrategyChoice& choice);

@@ -2,6 +2,7 @@
 /// `crossing`: watertight dual contouring in any dimension (docs/crossing.md; beyond the paper).
 #pragma once
 
+#include "framework/core/registry.hpp"
 #include "framework/core/strategy.hpp"
 
 namespace ndc {
@@ -22,6 +23,12 @@ class CrossingConnection final {
   /// smaller than the face determinant, about c^(3/4) for a quartic contact) 20 halvings prove
   /// the root unique; the extra levels cost only on such faces.
   int maxFaceDepth = 20;
+
+  /// The model's name, what it does, its parameters with their defaults and its capabilities
+  /// (defined in crossing/spec.cpp, next to the model; the family's registry lists it in one line).
+  static ModelSpec spec();
+  /// The model with a spec's parameter values.
+  static CrossingConnection create(const Parameters& parameters);
 
   template <class S>
   ConnectionOutput<S> connect(const ConnectionInput<S>& in) const;

@@ -6,10 +6,20 @@
 
 namespace ndc {
 
+ModelSpec NaiveConnection::spec() {
+  return {"naive",
+          "The thick-volume baseline (Sec. 4.1, Fig. 3(b)): every solution cell joined to its "
+          "face neighbours, no classification.",
+          {},
+          {.certifies = false, .refines = false, .minK = 1, .maxK = 2}};
+}
+
+NaiveConnection NaiveConnection::create(const Parameters&) { return {}; }
+
 template <class S>
 ConnectionOutput<S> NaiveConnection::connect(const ConnectionInput<S>& input) const {
   using namespace connection_detail;
-  requirePaperDimension("naive", input.k);
+  requireCapableK(spec(), input.k);
   const SolutionCells& cells = input.cells;
   ConnectionOutput<S> out;
   Complex<S>& complex = out.complex;

@@ -400,9 +400,26 @@ class PaperBuilder {
 
 }  // namespace
 
+ModelSpec PaperConnection::spec() {
+  const Options defaults;
+  return {"paper",
+          "The paper's connection (Sec. 4.1, 4.2): normal cells joined through shared faces, "
+          "abnormal cells repaired in their tangent space.",
+          {{"extra_layers", ParameterType::kInteger, static_cast<double>(defaults.extraLayers), 0,
+            8, "expansions through abnormal cells beyond the paper's n - 1 layers"},
+           {"thin_thick_normal", ParameterType::kBoolean, defaults.thinThickNormal ? 1.0 : 0.0, 0,
+            1, "k = 1: thin thick normal sets along the tangent line (false: the literal rule)"}},
+          {.certifies = false, .refines = false, .minK = 1, .maxK = 2}};
+}
+
+PaperConnection PaperConnection::create(const Parameters& parameters) {
+  return PaperConnection({.thinThickNormal = parameters.boolean("thin_thick_normal"),
+                          .extraLayers = parameters.integer("extra_layers")});
+}
+
 template <class S>
 ConnectionOutput<S> PaperConnection::connect(const ConnectionInput<S>& input) const {
-  connection_detail::requirePaperDimension("paper", input.k);
+  connection_detail::requireCapableK(spec(), input.k);
   PaperBuilder<S> builder(input, options_);
   return builder.run();
 }

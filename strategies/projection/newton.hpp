@@ -83,6 +83,8 @@ class NewtonProjection final {
 
 extern template class NewtonProjection<double>;
 extern template class NewtonProjection<Mpfr>;
+static_assert(ProjectionStrategy<NewtonProjection<double>, double>);
+static_assert(ProjectionStrategy<NewtonProjection<Mpfr>, Mpfr>);
 
 /// The projection family: one closed variant, dispatched once per stage.
 /// Models: NewtonProjection.
