@@ -1,4 +1,4 @@
-// The cell tests of the topology certificate (strategies/connection/certificate.hpp) against
+// The cell tests of the topology certificate (strategies/connection/crossing/certificate.hpp) against
 // ground truth: a 2-sphere in R^4, M = {x0^2 + x1^2 + x2^2 = 1, x3 = x0}, whose coordinate x3
 // has a maximum at p = (1, 0, 0, 1). Faces x3 = c near p are where the face-graph test cannot
 // succeed (the normal space of M contains e3 at p) and each equation alone meets the face, so
@@ -21,7 +21,7 @@
 #include "framework/core/inverse.hpp"
 #include "framework/core/problem.hpp"
 #include "framework/core/system.hpp"
-#include "strategies/connection/certificate.hpp"
+#include "strategies/connection/crossing/certificate.hpp"
 #include "tests/test_support.hpp"
 
 namespace {

@@ -34,7 +34,7 @@
 #include "framework/applications/load.hpp"
 #include "framework/core/problem.hpp"
 #include "framework/pipeline/pipeline.hpp"
-#include "strategies/connection/leaf_model.hpp"
+#include "strategies/connection/crossing/leaf_model.hpp"
 #include "tests/test_support.hpp"
 
 namespace fs = std::filesystem;

@@ -1,4 +1,4 @@
-// The crossing connection's face solver by evaluation (strategies/connection/face_solver.hpp,
+// The crossing connection's face solver by evaluation (strategies/connection/crossing/face_solver.hpp,
 // docs/crossing.md "Faces by evaluation") on generated faces with a planted root: square
 // systems F(x) = A (x - p) + b (x_s - p_s)(x_t - p_t) with small integer A and b, whose only
 // root in the face is p (the test checks that bound), placed where the solver's boxes make
@@ -20,7 +20,7 @@
 
 #include "framework/core/problem.hpp"
 #include "framework/core/system.hpp"
-#include "strategies/connection/face_solver.hpp"
+#include "strategies/connection/crossing/face_solver.hpp"
 #include "tests/test_support.hpp"
 
 namespace {

@@ -13,8 +13,8 @@
 #include "framework/core/box.hpp"
 #include "framework/core/scalar.hpp"
 #include "framework/core/strategy.hpp"
-#include "strategies/connection/cell_tree.hpp"
-#include "strategies/connection/dual_polygon.hpp"
+#include "strategies/connection/crossing/cell_tree.hpp"
+#include "strategies/connection/crossing/dual_polygon.hpp"
 
 namespace ndc::crossing_detail {
 

@@ -1,4 +1,4 @@
-#include "strategies/connection/certificate.hpp"
+#include "strategies/connection/crossing/certificate.hpp"
 
 #include "framework/core/inverse.hpp"
 #include "framework/core/parallel.hpp"
@@ -189,17 +189,13 @@ struct FacetWork {
   std::vector<int> order;
 };
 
-}  // namespace
-
+/// Z = Y J in midpoint-radius form into w.zc, w.zr, with Y the inverse of the midpoint of B,
+/// the m pivot columns of J (w.order: B first, the other columns after); false when B is
+/// singular.
 template <class S>
-std::uint64_t GraphTest<S>::facetGraphs(std::span<const Interval<S>> jacobian,
-                                        std::uint64_t wanted) {
+bool preconditioned(int m, int n, std::span<const Interval<S>> jacobian, FacetWork<S>& w) {
   using std::abs;
-  const int m = m_, n = n_;
-  if (n > 64 || m < 1 || n <= m || wanted == 0) return 0;
   const auto mm = std::size_t(m), nn = std::size_t(n);
-  std::optional<FacetWork<S>> fresh;
-  FacetWork<S>& w = threadScratch<S, FacetWork<S>>(fresh);
   // B: the m pivot columns of the midpoint Jacobian (the best conditioned block).
   w.mid.resize(mm * nn);
   for (std::size_t i = 0; i < mm; ++i) {
@@ -212,7 +208,7 @@ std::uint64_t GraphTest<S>::facetGraphs(std::span<const Interval<S>> jacobian,
     for (std::size_t t = 0; t < mm; ++t)
       w.square[t * mm + i] = jacobian[i * nn + std::size_t(order[t])].midpoint();
   }
-  if (!invertGaussJordan(m, w.square, w.inverse)) return 0;
+  if (!invertGaussJordan(m, w.square, w.inverse)) return false;
   // Z = Y J in midpoint-radius form: centre Y mid J, radius |Y| rad J plus the sums' rounding
   // (gamma of their magnitude; the same margin as the leaf model's).
   const S eps = ScalarTraits<S>::epsilon();
@@ -237,6 +233,26 @@ std::uint64_t GraphTest<S>::facetGraphs(std::span<const Interval<S>> jacobian,
       w.zr[i * nn + j] = radius * up + gamma * magnitude + tiny;
     }
   }
+  return true;
+}
+
+}  // namespace
+
+template <class S>
+std::uint64_t GraphTest<S>::facetGraphs(std::span<const Interval<S>> jacobian,
+                                        std::uint64_t wanted) {
+  using std::abs;
+  const int m = m_, n = n_;
+  if (n > 64 || m < 1 || n <= m || wanted == 0) return 0;
+  const auto nn = std::size_t(n);
+  std::optional<FacetWork<S>> fresh;
+  FacetWork<S>& w = threadScratch<S, FacetWork<S>>(fresh);
+  if (!preconditioned(m, n, jacobian, w)) return 0;
+  const std::vector<int>& order = w.order;  // B = order[0, m), the others after
+  const S eps = ScalarTraits<S>::epsilon();
+  const S gamma = S(8 * (n + m + 8)) * eps;
+  const S tiny = S(std::numeric_limits<double>::min());
+  const S up = S(1) + gamma;
   // Row i of I - T summed over the block's columns below one, T's entry (i, t) in centre c +-
   // radius r: sum |delta - c| + r, rounded up with gamma of the terms' magnitude.
   const auto rowBelowOne = [&](const auto& entry, int i, int p, int u) {

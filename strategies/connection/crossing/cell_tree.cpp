@@ -1,4 +1,4 @@
-#include "strategies/connection/cell_tree.hpp"
+#include "strategies/connection/crossing/cell_tree.hpp"
 
 #include <stdexcept>
 

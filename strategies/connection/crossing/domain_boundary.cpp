@@ -1,4 +1,4 @@
-#include "strategies/connection/domain_boundary.hpp"
+#include "strategies/connection/crossing/domain_boundary.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,10 +8,10 @@
 #include "framework/core/iteration.hpp"
 #include "framework/core/minimum_norm.hpp"
 #include "framework/core/parallel.hpp"
-#include "strategies/connection/certificate.hpp"
-#include "strategies/connection/face_solver.hpp"
-#include "strategies/connection/jacobian_work.hpp"
-#include "strategies/connection/leaf_model.hpp"
+#include "strategies/connection/crossing/certificate.hpp"
+#include "strategies/connection/crossing/enclosure.hpp"
+#include "strategies/connection/crossing/jacobian_work.hpp"
+#include "strategies/connection/crossing/leaf_model.hpp"
 
 namespace ndc::crossing_detail {
 

@@ -1,4 +1,4 @@
-#include "strategies/connection/dual_complex.hpp"
+#include "strategies/connection/crossing/dual_complex.hpp"
 
 #include <algorithm>
 #include <array>
@@ -12,8 +12,8 @@
 
 #include "framework/core/iteration.hpp"
 #include "framework/core/parallel.hpp"
-#include "strategies/connection/domain_boundary.hpp"
-#include "strategies/connection/jacobian_work.hpp"
+#include "strategies/connection/crossing/domain_boundary.hpp"
+#include "strategies/connection/crossing/jacobian_work.hpp"
 
 namespace ndc::crossing_detail {
 namespace {

@@ -15,6 +15,11 @@
 
 namespace ndc::crossing_detail {
 
+template <class S>
+using Matrix = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+template <class S>
+using Vector = Eigen::Matrix<S, Eigen::Dynamic, 1>;
+
 /// The Jacobian at a point and its factorizations, in per-thread storage (threadScratch).
 template <class S>
 struct JacobianWork {
