@@ -14,177 +14,25 @@
 /// `tab1-degeneracy` and `fig-degeneracy-vs-n`). A missing or malformed reference file makes
 /// that artefact fail with a one-line ndc::InputError naming the file.
 ///
-/// Each known artefact id has one builder, registered in one table in report.cpp (kBuilders).
+/// Each known artefact id has one builder, registered in one table in artefacts.cpp (kBuilders);
+/// docs/experiments.md ("The report's files") lists the files of the report and their roles.
 #pragma once
 
-#include <array>
 #include <cstddef>
 #include <filesystem>
-#include <limits>
 #include <ostream>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "experiments/report/csv.hpp"
+#include "experiments/report/gnuplot.hpp"
+#include "experiments/report/stats.hpp"
+#include "experiments/report/table.hpp"
 #include "framework/core/io.hpp"
 
 namespace ndc::report {
-
-// --- CSV ---------------------------------------------------------------------------------------
-
-/// A CSV file held as text cells, addressed by column name. Malformed input and missing
-/// columns throw ndc::InputError with a one-line message that names the file.
-class CsvTable {
- public:
-  /// Where the table came from (used in error messages).
-  std::string source;
-  /// Column names, from the first line.
-  std::vector<std::string> header;
-  /// Data rows; every row has header.size() cells.
-  std::vector<std::vector<std::string>> rows;
-
-  /// Number of data rows.
-  std::size_t size() const { return rows.size(); }
-  /// Whether a column of that name exists.
-  bool hasColumn(std::string_view name) const;
-  /// Index of a column; throws InputError `SOURCE: missing column 'NAME'` when absent.
-  std::size_t column(std::string_view name) const;
-  /// The text of a cell.
-  const std::string& cell(std::size_t row, std::string_view name) const;
-  /// A cell as a number: NaN when the cell is empty (or "nan"); throws InputError when it
-  /// is neither empty nor a number.
-  double number(std::size_t row, std::string_view name) const;
-  /// Throws InputError naming the first of `names` that is not a column.
-  void require(std::span<const std::string_view> names) const;
-};
-
-/// Parses CSV text (RFC 4180: fields separated by commas, optionally in double quotes, a
-/// doubled quote inside quotes is a quote, quoted fields may hold commas and line breaks; LF
-/// or CRLF line ends; empty fields allowed; a final line break is optional). The first line is
-/// the header. Throws InputError (`SOURCE:LINE: message`) for an unterminated quote, text
-/// after a closing quote, a row with a different number of fields, an empty or duplicate
-/// column name, or no header.
-CsvTable parseCsv(std::string_view text, const std::string& source);
-
-/// Reads and parses a CSV file; throws InputError when it cannot be read or parsed.
-CsvTable readCsv(const std::filesystem::path& file);
-
-// --- Aggregation -------------------------------------------------------------------------------
-
-/// Summary statistics of a sample; NaN values are ignored (count says how many were used).
-struct Stats {
-  std::size_t count = 0;                                     ///< finite values used
-  double mean = std::numeric_limits<double>::quiet_NaN();    ///< arithmetic mean
-  double stddev = std::numeric_limits<double>::quiet_NaN();  ///< sample standard deviation (n-1); 0
-                                                             ///< for one value
-  double min = std::numeric_limits<double>::quiet_NaN();     ///< smallest value
-  double max = std::numeric_limits<double>::quiet_NaN();     ///< largest value
-  double median =
-      std::numeric_limits<double>::quiet_NaN();  ///< middle value (mean of the two middle ones)
-};
-
-/// Statistics of the finite values of `values`.
-Stats summarize(std::span<const double> values);
-
-/// Rows sharing the same values in the grouping columns, in order of first appearance.
-struct Group {
-  std::vector<std::string> key;   ///< the grouping columns' values
-  std::vector<std::size_t> rows;  ///< indices into the table's rows
-};
-
-/// Groups `rows` (all rows when empty) by the values of `columns`, keeping the order in which
-/// each key first appears. Throws InputError for a missing column.
-std::vector<Group> groupBy(const CsvTable& table, std::span<const std::string> columns,
-                           std::span<const std::size_t> rows = {});
-
-/// The values of a numeric column at `rows` (NaN for empty cells).
-std::vector<double> values(const CsvTable& table, std::span<const std::size_t> rows,
-                           std::string_view column);
-
-/// The columns among `candidates` that exist and take more than one value over the table.
-std::vector<std::string> varyingColumns(const CsvTable& table,
-                                        std::span<const std::string> candidates);
-
-/// Least-squares slope of log(y) against log(x) over the pairs where both are positive and
-/// finite; NaN with fewer than two such pairs.
-double logLogSlope(std::span<const double> x, std::span<const double> y);
-
-// --- Formatting --------------------------------------------------------------------------------
-
-/// A number with `significant` significant digits, in fixed notation for 1e-3 <= |v| < 1e6
-/// and scientific (`1.2e-14`) otherwise; integers print without a decimal point; NaN is "–"
-/// (an en dash, "--" in LaTeX).
-std::string formatNumber(double value, int significant = 3);
-/// `value` with `decimals` digits after the point; NaN is "–".
-std::string formatFixed(double value, int decimals);
-
-// --- Tables ------------------------------------------------------------------------------------
-
-/// A generated table: its id (the artefact id), caption, column titles, alignment and cells.
-struct Table {
-  std::string id;                              ///< artefact id, e.g. `tab1-degeneracy`
-  std::string caption;                         ///< one sentence, plain text
-  std::vector<std::string> columns;            ///< column titles, plain text
-  std::string align;                           ///< one of `l`, `r`, `c` per column
-  std::vector<std::vector<std::string>> rows;  ///< cells, plain text
-};
-
-/// The table in GitHub Markdown: a header row, an alignment row (`---`, `--:`, `:-:`) and one
-/// line per row; `|` in cells is escaped. No caption (callers write it above).
-std::string toMarkdown(const Table& table);
-
-/// The table as a LaTeX `table` float with `booktabs` rules, the caption, `\label{<id>}`, and
-/// special characters escaped; "–" (NaN) becomes `--`. Needs the booktabs package.
-std::string toLatex(const Table& table);
-
-/// Escapes LaTeX special characters (`\ & % $ # _ { } ~ ^`) in plain text.
-std::string latexEscape(std::string_view text);
-
-// --- Figures -----------------------------------------------------------------------------------
-
-/// A gnuplot script under construction: inline data blocks and plot commands. The finished
-/// script renders the same commands twice, to `OUT.png` (pngcairo) and `OUT.pdf` (pdfcairo),
-/// where `OUT` is the gnuplot variable `out` (default: the artefact id), so that the caller
-/// can render to temporary names and rename them once gnuplot succeeded.
-class GnuplotScript {
- public:
-  /// A script for artefact `id` whose PNG is `width` x `height` pixels.
-  explicit GnuplotScript(std::string id, int width = 1000, int height = 700);
-  /// Adds a data block `$name` of rows of numbers; an empty row writes a blank line
-  /// (a break between curves or polygons). NaN is written as `NaN`.
-  void data(const std::string& name, const std::vector<std::vector<double>>& rows);
-  /// Adds one line of gnuplot commands (run for each output format).
-  void command(const std::string& line);
-  /// The complete script text.
-  std::string text() const;
-
- private:
-  std::string id_;
-  int width_, height_;
-  std::string data_;
-  std::string commands_;
-};
-
-/// Segments (pairs of vertex indices; other simplices are skipped) chained into polylines of
-/// vertex indices: open chains from their ends (and branch points) first, then closed loops,
-/// which repeat their first vertex at the end.
-std::vector<std::vector<int>> chainSegments(const std::vector<std::vector<int>>& segments);
-
-/// Rows for GnuplotScript::data of polylines (vertex indices into `points`) for
-/// `splot ... with lines`: two blank lines after each polyline, so that each is its own data
-/// set (one blank line makes splot join blocks of equal length as a grid, drawing zigzags and
-/// chords between separate polylines).
-std::vector<std::vector<double>> polylineRows(const std::vector<std::vector<int>>& lines,
-                                              const std::vector<std::array<double, 3>>& points);
-
-/// Whether `gnuplot` is on PATH.
-bool gnuplotAvailable();
-
-/// Runs gnuplot on `ID.gp` in `dir` with the output base `ID.tmp` (log in `ID.gnuplot.log`)
-/// and, on success, renames `ID.tmp.png` and `ID.tmp.pdf` to `ID.png` and `ID.pdf`, where ID is
-/// `id`. Returns an empty string on success, otherwise the reason (the last line of the log).
-std::string renderGnuplot(const std::filesystem::path& dir, const std::string& id);
 
 // --- Reading run outputs -----------------------------------------------------------------------
 

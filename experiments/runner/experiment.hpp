@@ -14,7 +14,8 @@
 #include <utility>
 #include <vector>
 
-#include "framework/core/json.hpp"  // flattenJsonNumbers, which reads the runs' summary.json
+#include "experiments/runner/columns.hpp"  // kExperimentRunColumns, kExperimentSummaryColumns
+#include "framework/core/json.hpp"         // flattenJsonNumbers, which reads the runs' summary.json
 #include "framework/core/problem.hpp"
 #include "framework/core/summary.hpp"
 
@@ -70,79 +71,6 @@ struct ExperimentRun {
 /// by n then seed), then bounding, subdivision, projection, classification, connection,
 /// scalar and precision, depth, and jitter seed.
 std::vector<ExperimentRun> experimentGrid(const ExperimentConfig& config);
-
-/// The leading columns of the combined CSV `<id>.csv`, one row per run.
-/// `expect_ok` and `expect_notes` record the comparison of the run's mesh with the problem's
-/// `[expect]` (checkExpectation, expectation.hpp).
-inline constexpr std::array<std::string_view, 22> kExperimentRunColumns = {
-    "experiment",
-    "run",
-    "problem",
-    "problem_file",
-    "n",
-    "k",
-    "depth",
-    "seed",
-    "scalar",
-    "precision_bits",
-    "bounding",
-    "subdivision",
-    "projection",
-    "classification",
-    "connection",
-    "status",
-    "exit_code",
-    "error",
-    "expect_components",
-    "expect_euler_characteristic",
-    "expect_ok",
-    "expect_notes"};
-
-/// The numeric summary.json fields (docs/contracts.md 4.3, and the counts of 4.5) that follow,
-/// flattened with dotted names. Numeric fields a later summary schema adds come after these, sorted
-/// by name; list elements (singular points, the perturbation level) and `expect` (see `expect_ok`)
-/// are left out.
-inline constexpr std::array<std::string_view, 40> kExperimentSummaryColumns = {
-    "cells.visited",
-    "cells.solution",
-    "cells.normal",
-    "cells.abnormal",
-    "cells.failed",
-    "mesh.vertices",
-    "mesh.edges",
-    "mesh.triangles",
-    "mesh.components",
-    "mesh.boundary_edges",
-    "mesh.nonmanifold_edges",
-    "mesh.euler_characteristic",
-    "mesh.open_ends",
-    "mesh.branch_vertices",
-    "accuracy.max_residual",
-    "accuracy.max_chord_error",
-    "diagnostics.ambiguous_cells",
-    "diagnostics.singular_cells",
-    "diagnostics.chord_failures",
-    "timing_s.subdivision",
-    "timing_s.projection",
-    "timing_s.connection",
-    "timing_s.analysis",
-    "timing_s.total",
-    "diagnostics.off_manifold_vertices",
-    "diagnostics.perturbation.attempts",
-    "diagnostics.perturbation.degenerate_crossings",
-    "mesh.boundary_components",
-    "budget.max_memory_bytes",
-    "budget.estimated_memory_bytes",
-    "budget.timeout_s",
-    "topology.base_level",
-    "topology.certified_cells",
-    "topology.max_depth",
-    "topology.max_level",
-    "topology.reason",
-    "topology.refined_cells",
-    "topology.uncertified_cells",
-    "topology.block_cells",
-    "budget.estimated_time_s"};
 
 /// Where the runs of an experiment are executed (docs/experiments.md).
 enum class Executor {

@@ -14,7 +14,7 @@
 #include <utility>
 #include <vector>
 
-#include "experiments/report/report.hpp"
+#include "experiments/report/csv.hpp"
 #include "experiments/view/embedded.hpp"
 #include "framework/core/errors.hpp"
 #include "framework/core/io.hpp"

@@ -20,12 +20,15 @@
 #include <memory>
 #include <span>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include "framework/core/problem.hpp"
+#include "framework/core/summary_schema.hpp"
 #include "framework/core/vertex_rows.hpp"
 
 namespace ndc {
@@ -146,116 +149,136 @@ void writeAtomically(const std::filesystem::path& target, const std::string& tex
 
 namespace {
 
-// The parts of summary.json (docs/contracts.md 4.2), each ending where the next begins.
-
-void jsonSettings(std::ostream& o, const Summary& s) {
-  const Settings& t = s.settings;
-  o << "  \"settings\": {\"depth\": " << t.depth << ", \"bounding\": " << jsonQuoted(t.bounding)
-    << ", \"subdivision\": " << jsonQuoted(t.subdivision)
-    << ", \"scalar\": " << jsonQuoted(t.scalar) << ", \"precision_bits\": " << t.precisionBits
-    << ", \"projection\": " << jsonQuoted(t.projection)
-    << ", \"classification\": " << jsonQuoted(t.classification)
-    << ", \"connection\": " << jsonQuoted(t.connection)
-    << ", \"jitter\": " << (t.jitter ? std::to_string(*t.jitter) : "null")
-    << ", \"max_depth\": " << s.topology.maxDepth
-    << ", \"tolerance\": " << (t.tolerance > 0 ? number(t.tolerance) : std::string("null"))
-    << ", \"threads\": " << t.threads << ", \"parameters\": {";
-  for (std::size_t i = 0; i < s.parameters.size(); ++i)
-    o << (i ? ", " : "") << jsonQuoted(s.parameters[i].first) << ": " << s.parameters[i].second;
-  o << "}},\n";
+/// The part of `path` before its last dot ("" at the top).
+std::string_view parentPath(std::string_view path) {
+  const std::size_t dot = path.rfind('.');
+  return dot == std::string_view::npos ? std::string_view() : path.substr(0, dot);
 }
 
-void jsonCellsAndMesh(std::ostream& o, const Summary& s) {
-  o << "  \"cells\": {\"visited\": " << s.visited << ", \"solution\": " << s.solution
-    << ", \"normal\": " << s.normal << ", \"abnormal\": " << s.abnormal
-    << ", \"failed\": " << s.failed << "},\n";
-  const MeshStats& m = s.mesh;
-  o << "  \"mesh\": {\"vertices\": " << m.vertices << ", \"edges\": " << m.edges
-    << ", \"triangles\": " << m.triangles << ", \"components\": " << m.components
-    << ", \"boundary_edges\": " << m.boundaryEdges
-    << ", \"boundary_components\": " << m.boundaryComponents
-    << ", \"nonmanifold_edges\": " << m.nonmanifoldEdges
-    << ", \"euler_characteristic\": " << m.eulerCharacteristic << ", \"open_ends\": " << m.openEnds
-    << ", \"branch_vertices\": " << m.branchVertices
-    << ", \"orientable\": " << (m.orientable ? "true" : "false") << "},\n";
-  o << "  \"accuracy\": {\"max_residual\": " << number(m.maxResidual)
-    << ", \"max_chord_error\": " << number(m.maxChordError) << "},\n";
+/// The part of `path` after its last dot: the field's name in its object.
+std::string_view fieldName(std::string_view path) {
+  const std::size_t dot = path.rfind('.');
+  return dot == std::string_view::npos ? path : path.substr(dot + 1);
 }
 
-void jsonDiagnostics(std::ostream& o, const Summary& s) {
-  o << "  \"diagnostics\": {\"ambiguous_cells\": " << s.ambiguousCells
-    << ", \"singular_cells\": " << s.singularCells
-    << ", \"chord_failures\": " << s.mesh.chordFailures
-    << ", \"off_manifold_vertices\": " << s.offManifoldVertices
-    << ", \"empty_zero_set\": " << (emptyZeroSet(s) ? "true" : "false");
-  // Extensions (docs/contracts.md 4.5): located singular points and the crossing's perturbation.
-  o << ",\n    \"singular_points\": [";
-  for (std::size_t i = 0; i < s.singularPoints.size(); ++i) {
-    const SingularPoint& p = s.singularPoints[i];
-    o << (i ? ",\n      " : "\n      ") << "{\"point\": " << numberList(p.point)
-      << ", \"sigma_min\": " << number(p.sigmaMin) << "}";
-  }
-  o << (s.singularPoints.empty() ? "]" : "\n    ]");
-  const PerturbationRecord& q = s.perturbation;
-  o << ",\n    \"perturbation\": {\"level\": " << numberList(q.level)
-    << ", \"attempts\": " << q.attempts << ", \"degenerate_crossings\": " << q.degenerateCrossings
-    << "}},\n";
+/// Whether `f` is the element of a list (`PATH[]`) or a map (`PATH.*`), not a field of its own.
+bool isElement(const SummaryField& f) { return f.path.ends_with("[]") || f.path.ends_with(".*"); }
+
+/// The field of kSummaryFields with exactly this path (a list's element `PATH[]`, a map's value
+/// `PATH.*`).
+const SummaryField& schemaField(std::string_view path) {
+  for (const SummaryField& f : kSummaryFields)
+    if (f.path == path) return f;
+  throw std::logic_error("summary schema: no field " + std::string(path));
 }
 
-void jsonTopologyAndTiming(std::ostream& o, const Summary& s) {
-  // Extension: the topology certificate and the adaptive refinement (docs/certificate.md).
-  const TopologyRecord& g = s.topology;
-  o << "  \"topology\": {\"certified\": " << (g.certified ? "true" : "false")
-    << ", \"reason\": " << (g.reason.empty() ? "null" : jsonQuoted(g.reason))
-    << ", \"certified_cells\": " << g.certifiedCells << ", \"refined_cells\": " << g.refinedCells
-    << ", \"uncertified_cells\": " << g.uncertifiedCells << ", \"block_cells\": " << g.blockCells
-    << ", \"base_level\": " << g.baseLevel << ", \"max_level\": " << g.maxLevel
-    << ", \"max_depth\": " << g.maxDepth << "},\n";
-  o << "  \"timing_s\": {\"subdivision\": " << number(s.tSubdivision)
-    << ", \"projection\": " << number(s.tProjection)
-    << ", \"connection\": " << number(s.tConnection) << ", \"analysis\": " << number(s.tAnalysis)
-    << ", \"total\": " << number(s.tTotal) << "}";
+/// Two spaces per level of `path` (one level per dot, plus one).
+std::string indentOf(std::string_view path) {
+  return std::string(2 * (std::count(path.begin(), path.end(), '.') + 1), ' ');
 }
 
-void jsonExtensions(std::ostream& o, const Summary& s) {
-  // The run's budgets (docs/input-limits.md) and the memory it was estimated to need.
-  o << ",\n  \"budget\": {\"max_memory_bytes\": " << number(s.memoryBudget)
-    << ", \"estimated_memory_bytes\": " << number(s.estimatedMemory) << ", \"timeout_s\": "
-    << (s.settings.timeoutSeconds ? number(*s.settings.timeoutSeconds) : "null")
-    << ", \"estimated_time_s\": " << number(s.estimatedSeconds) << "}";
-  // The problem's [expect] compared with the mesh, when it has one (docs/contracts.md 4.5).
-  if (!s.expect.empty()) {
-    o << ",\n  \"expect\": {";
-    for (std::size_t i = 0; i < s.expect.size(); ++i) {
-      const ExpectCheck& c = s.expect[i];
-      o << (i ? ", " : "") << jsonQuoted(c.key) << ": {\"wanted\": " << c.wanted;
-      if (c.notComparable.empty())
-        o << ", \"got\": " << c.got << ", \"ok\": " << (c.ok ? "true" : "false") << "}";
-      else
-        o << ", \"got\": null, \"ok\": null, \"not_comparable\": " << jsonQuoted(c.notComparable)
-          << "}";
+/// Writes summary.json by walking kSummaryFields: the top-level fields one per line, nested
+/// objects on one line (a field laid out on a new line starts one, indented by its level), the
+/// elements of a list one per line.
+class SummaryWriter {
+ public:
+  SummaryWriter(std::ostream& out, const Summary& s) : o_(out), s_(s) {}
+
+  /// The whole document.
+  void document() {
+    o_ << "{\n";
+    bool first = true;
+    for (const SummaryField& f : kSummaryFields) {
+      if (!parentPath(f.path).empty()) continue;
+      const SummaryValue v = valueOf(f, 0);
+      if (std::holds_alternative<SummaryAbsent>(v)) continue;
+      o_ << (first ? "  \"" : ",\n  \"") << fieldName(f.path) << "\": ";
+      write(f, v, 0);
+      first = false;
     }
-    o << "}";
+    o_ << "\n}\n";
   }
-  // Application problems: which application, and where its image map is singular.
-  if (!s.application.empty())
-    o << ",\n  \"application\": {\"name\": " << jsonQuoted(s.application)
-      << ", \"image_singular_vertices\": " << s.imageSingularVertices
-      << ", \"singular_meaning\": " << jsonQuoted(s.singularName) << "}";
-}
+
+ private:
+  SummaryValue valueOf(const SummaryField& f, std::size_t element) const {
+    if (f.meshStat) return s_.mesh.*f.meshStat;
+    return f.value ? f.value(s_, element) : SummaryValue(nullptr);
+  }
+
+  /// The fields of object `path` (of the list's or map's element `element`) as `{...}`.
+  void object(std::string_view path, std::size_t element) {
+    o_ << '{';
+    bool first = true;
+    for (const SummaryField& f : kSummaryFields) {
+      if (parentPath(f.path) != path || isElement(f)) continue;
+      const SummaryValue v = valueOf(f, element);
+      if (std::holds_alternative<SummaryAbsent>(v)) continue;
+      if (!first) o_ << (f.layout == SummaryLayout::newLine ? ",\n" + indentOf(f.path) : ", ");
+      o_ << '"' << fieldName(f.path) << "\": ";
+      write(f, v, element);
+      first = false;
+    }
+    o_ << '}';
+  }
+
+  /// The value `v` of field `f`.
+  void write(const SummaryField& f, const SummaryValue& v, std::size_t element) {
+    switch (f.type) {
+      case SummaryType::object:
+        return object(f.path, element);
+      case SummaryType::list:
+        return list(f, std::get<SummaryKeys>(v).keys.size());
+      case SummaryType::map:
+        return map(f, std::get<SummaryKeys>(v).keys);
+      default:
+        return leaf(v);
+    }
+  }
+
+  /// A list of objects, one element per line.
+  void list(const SummaryField& f, std::size_t count) {
+    const std::string element = std::string(f.path) + "[]";
+    const std::string indent = indentOf(f.path) + "  ";
+    o_ << '[';
+    for (std::size_t i = 0; i < count; ++i) {
+      o_ << (i ? ",\n" : "\n") << indent;
+      object(element, i);
+    }
+    o_ << (count ? "\n" + indentOf(f.path) + "]" : std::string("]"));
+  }
+
+  /// An object whose keys come from the run, each with the value of the field `PATH.*`.
+  void map(const SummaryField& f, const std::vector<std::string>& keys) {
+    const SummaryField& value = schemaField(std::string(f.path) + ".*");
+    o_ << '{';
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      o_ << (i ? ", " : "") << jsonQuoted(keys[i]) << ": ";
+      write(value, valueOf(value, i), i);
+    }
+    o_ << '}';
+  }
+
+  /// A value that is not a container.
+  void leaf(const SummaryValue& v) {
+    if (std::holds_alternative<std::nullptr_t>(v)) o_ << "null";
+    if (const bool* b = std::get_if<bool>(&v)) o_ << (*b ? "true" : "false");
+    if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) o_ << *i;
+    if (const std::uint64_t* u = std::get_if<std::uint64_t>(&v)) o_ << std::to_string(*u);
+    if (const double* x = std::get_if<double>(&v)) o_ << number(*x);
+    if (const std::string* t = std::get_if<std::string>(&v)) o_ << jsonQuoted(*t);
+    if (const auto* list = std::get_if<std::vector<double>>(&v)) o_ << numberList(*list);
+    if (const SummaryJson* json = std::get_if<SummaryJson>(&v)) o_ << json->text;
+  }
+
+  std::ostream& o_;
+  const Summary& s_;
+};
 
 }  // namespace
 
 std::string toJson(const Summary& s) {
   std::ostringstream o;
-  o << "{\n  \"schema\": \"ndcontour.summary/1\",\n  \"problem\": " << jsonQuoted(s.problem)
-    << ",\n  \"n\": " << s.n << ",\n  \"k\": " << s.k << ",\n";
-  jsonSettings(o, s);
-  jsonCellsAndMesh(o, s);
-  jsonDiagnostics(o, s);
-  jsonTopologyAndTiming(o, s);
-  jsonExtensions(o, s);
-  o << "\n}\n";
+  SummaryWriter(o, s).document();
   return o.str();
 }
 

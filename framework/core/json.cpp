@@ -10,10 +10,11 @@ namespace ndc {
 
 namespace {
 
-/// A recursive-descent reader of the JSON that summary.json holds, collecting numbers.
+/// A recursive-descent reader of the JSON that summary.json holds, collecting numbers (or, with
+/// `leaves`, every leaf with an empty text).
 class JsonFlattener {
  public:
-  explicit JsonFlattener(std::string_view text) : s_(text) {}
+  explicit JsonFlattener(std::string_view text, bool leaves = false) : s_(text), leaves_(leaves) {}
 
   std::vector<std::pair<std::string, std::string>> run() {
     value("", 0);
@@ -66,7 +67,7 @@ class JsonFlattener {
     const char c = s_[i_];
     if (c == '{') {
       ++i_;
-      if (take('}')) return;
+      if (take('}')) return leaf(path);
       do {
         space();
         const std::string key = string();
@@ -76,17 +77,20 @@ class JsonFlattener {
       expect('}');
     } else if (c == '[') {
       ++i_;
-      if (take(']')) return;
+      if (take(']')) return leaf(path);
       int index = 0;
       do value(path + "." + std::to_string(index++), depth + 1);
       while (take(','));
       expect(']');
     } else if (c == '"') {
       string();
+      leaf(path);
     } else if (s_.substr(i_, 4) == "true") {
       i_ += 4;
+      leaf(path);
     } else if (s_.substr(i_, 5) == "false") {
       i_ += 5;
+      leaf(path);
     } else if (s_.substr(i_, 4) == "null") {
       i_ += 4;
       out_.emplace_back(path, "");
@@ -102,7 +106,13 @@ class JsonFlattener {
     }
   }
 
+  /// Records a leaf that is not a number or null (only when collecting every leaf).
+  void leaf(const std::string& path) {
+    if (leaves_) out_.emplace_back(path, "");
+  }
+
   std::string_view s_;
+  bool leaves_;
   std::size_t i_ = 0;
   std::vector<std::pair<std::string, std::string>> out_;
 };
@@ -111,6 +121,12 @@ class JsonFlattener {
 
 std::vector<std::pair<std::string, std::string>> flattenJsonNumbers(std::string_view json) {
   return JsonFlattener(json).run();
+}
+
+std::vector<std::string> jsonLeafPaths(std::string_view json) {
+  std::vector<std::string> paths;
+  for (auto& [path, text] : JsonFlattener(json, true).run()) paths.push_back(std::move(path));
+  return paths;
 }
 
 }  // namespace ndc

@@ -1,6 +1,6 @@
 /// \file json.hpp
 /// Reading numbers out of JSON text (the summary.json of a run, docs/contracts.md 4.3): a small
-/// recursive-descent reader that keeps the numeric fields with their dotted paths.
+/// recursive-descent reader that keeps the numeric fields (or every leaf) with their dotted paths.
 #pragma once
 
 #include <string>
@@ -14,5 +14,10 @@ namespace ndc {
 /// their dotted paths (`cells.visited`); the number text is kept as written, null is "".
 /// Throws std::runtime_error on malformed JSON.
 std::vector<std::pair<std::string, std::string>> flattenJsonNumbers(std::string_view json);
+
+/// The dotted paths of every leaf of a JSON document, in document order: strings, numbers,
+/// booleans, null, and empty objects and arrays (array elements are numbered from 0). Throws
+/// std::runtime_error on malformed JSON.
+std::vector<std::string> jsonLeafPaths(std::string_view json);
 
 }  // namespace ndc
