@@ -252,52 +252,57 @@ void dropUnusedVertices(Complex<S>& c) {
   for (std::int32_t& v : c.simplices) v = map[v];
 }
 
+namespace {
+
+/// weld, step 1: greedy merge through the hashed bucket grid, among the vertices that can merge
+/// at all (the others stay, and are found by no one): in vertex order, each merges into the
+/// first earlier vertex that stayed and lies within tolerance (first: the one that stayed
+/// earliest, so the one with the lowest output number). Returns, per vertex, the vertex it
+/// merges into (itself: it stays).
 template <class S>
-Complex<S> weld(const Complex<S>& complex, double tolerance) {
+std::vector<std::int32_t> mergeTargets(const Complex<S>& complex, double tolerance) {
   const int n = complex.n;
-  const int k = complex.k;
-  Complex<S> out;
-  out.n = n;
-  out.k = k;
   const S tol2 = tolerance > 0 ? S(tolerance) * S(tolerance) : S(0);
   const std::size_t vertices = complex.vertexCount();
-
-  // Step 1: greedy merge through the hashed bucket grid, among the vertices that can merge at
-  // all (the others stay, and are found by no one): in vertex order, each merges into the
-  // first earlier vertex that stayed and lies within tolerance (first: the one that stayed
-  // earliest, so the one with the lowest output number).
   const WeldBuckets<S> buckets(complex, tolerance);
   const std::vector<std::uint8_t> candidate = mergeCandidates(complex, buckets);
-  std::vector<std::int32_t> into(vertices);  // the vertex each merges into (itself: it stays)
+  std::vector<std::int32_t> into(vertices);
   std::iota(into.begin(), into.end(), std::int32_t{0});
-  {
-    // bucket hash -> its latest staying vertex; next[v]: the one added to the bucket before v.
-    FlatMap<std::uint64_t, std::int32_t> latest;
-    std::vector<std::int32_t> next(vertices, -1);
-    typename WeldBuckets<S>::Scratch w;
-    for (std::size_t v = 0; v < vertices; ++v) {
-      if (!candidate[v]) continue;
-      const auto x = complex.vertex(v);
-      std::int32_t found = -1;
-      buckets.probes(v, w, [&](std::uint64_t hash) {
-        const std::int32_t* last = latest.find(hash);
-        for (std::int32_t r = last ? *last : -1; r >= 0; r = next[r]) {
-          const auto y = complex.vertex(static_cast<std::size_t>(r));
-          S d2 = 0;
-          for (int j = 0; j < n; ++j) d2 += (x[j] - y[j]) * (x[j] - y[j]);
-          if (d2 <= tol2 && (found < 0 || r < found)) found = r;
-        }
-      });
-      if (found >= 0) {
-        into[v] = found;
-        continue;
+  // bucket hash -> its latest staying vertex; next[v]: the one added to the bucket before v.
+  FlatMap<std::uint64_t, std::int32_t> latest;
+  std::vector<std::int32_t> next(vertices, -1);
+  typename WeldBuckets<S>::Scratch w;
+  for (std::size_t v = 0; v < vertices; ++v) {
+    if (!candidate[v]) continue;
+    const auto x = complex.vertex(v);
+    std::int32_t found = -1;
+    buckets.probes(v, w, [&](std::uint64_t hash) {
+      const std::int32_t* last = latest.find(hash);
+      for (std::int32_t r = last ? *last : -1; r >= 0; r = next[r]) {
+        const auto y = complex.vertex(static_cast<std::size_t>(r));
+        S d2 = 0;
+        for (int j = 0; j < n; ++j) d2 += (x[j] - y[j]) * (x[j] - y[j]);
+        if (d2 <= tol2 && (found < 0 || r < found)) found = r;
       }
-      const auto [slot, added] = latest.insert(buckets.home(v, w), static_cast<std::int32_t>(v));
-      if (!added) next[v] = *slot;
-      *slot = static_cast<std::int32_t>(v);
+    });
+    if (found >= 0) {
+      into[v] = found;
+      continue;
     }
+    const auto [slot, added] = latest.insert(buckets.home(v, w), static_cast<std::int32_t>(v));
+    if (!added) next[v] = *slot;
+    *slot = static_cast<std::int32_t>(v);
   }
-  // The staying vertices numbered in order, copied in parallel.
+  return into;
+}
+
+/// weld, the staying vertices numbered in order and copied into `out` in parallel. Returns each
+/// input vertex's output number.
+template <class S>
+std::vector<std::int32_t> copyStaying(const Complex<S>& complex,
+                                      const std::vector<std::int32_t>& into, Complex<S>& out) {
+  const int n = complex.n;
+  const std::size_t vertices = complex.vertexCount();
   std::vector<std::int32_t> remap(vertices);
   std::int32_t stayed = 0;
   for (std::size_t v = 0; v < vertices; ++v) {
@@ -315,10 +320,15 @@ Complex<S> weld(const Complex<S>& complex, double tolerance) {
         if (!complex.vertexCell.empty()) out.vertexCell[remap[v]] = complex.vertexCell[v];
       },
       4096);
+  return remap;
+}
 
-  // Step 2: remap the simplices, drop degenerate ones and duplicates (same vertex set): the
-  // first of each vertex set stays, in the input's order.
-  const auto width = static_cast<std::size_t>(k + 1);
+/// weld, step 2: remap the simplices into `out`, dropping degenerate ones and duplicates (same
+/// vertex set): the first of each vertex set stays, in the input's order.
+template <class S>
+void remapSimplices(const Complex<S>& complex, const std::vector<std::int32_t>& remap,
+                    Complex<S>& out) {
+  const auto width = static_cast<std::size_t>(complex.k + 1);
   const std::size_t count = complex.simplexCount();
   std::vector<std::int32_t> sorted(count * width);
   std::vector<std::uint8_t> keep(count, 1);
@@ -345,6 +355,18 @@ Complex<S> weld(const Complex<S>& complex, double tolerance) {
           out.simplices[at[s] * width + i] = remap[complex.simplices[s * width + i]];
       },
       4096);
+}
+
+}  // namespace
+
+template <class S>
+Complex<S> weld(const Complex<S>& complex, double tolerance) {
+  Complex<S> out;
+  out.n = complex.n;
+  out.k = complex.k;
+  const std::vector<std::int32_t> into = mergeTargets(complex, tolerance);
+  const std::vector<std::int32_t> remap = copyStaying(complex, into, out);
+  remapSimplices(complex, remap, out);
   return out;
 }
 
