@@ -72,6 +72,9 @@ struct Capabilities {
   bool refines = false;
   /// Connection: the manifold dimensions k it builds, minK..maxK.
   int minK = 1, maxK = 2;
+
+  /// Whether it builds manifolds of dimension k.
+  bool builds(int k) const { return k >= minK && k <= maxK; }
 };
 
 /// What a registry says about one model.

@@ -695,24 +695,6 @@ RunResult run(const Problem& problem, const Settings& settings, const StrategyCh
   return result;
 }
 
-/// The connection's k range (its capabilities) holds the problem's k; InputError naming the
-/// connections that do build such a k, if any, before any work.
-void checkConnectionK(const Problem& problem, const ModelSpec& connection) {
-  const int k = problem.k();
-  const Capabilities& can = connection.capabilities;
-  if (k >= can.minK && k <= can.maxK) return;
-  const std::string others =
-      connectionsThat([k](const Capabilities& c) { return k >= c.minK && k <= c.maxK; });
-  const auto range = [](const Capabilities& c) {
-    return c.minK == c.maxK ? "k = " + std::to_string(c.minK)
-                            : "k = " + std::to_string(c.minK) + ".." + std::to_string(c.maxK);
-  };
-  throw InputError(
-      problem.path + ": the " + connection.name + " connection builds " + range(can) +
-      "; this problem has k = " + std::to_string(k) + " (n - m)" +
-      (others.empty() ? ", which no connection builds yet" : "; use --connection " + others));
-}
-
 }  // namespace
 
 int defaultMaxDepth(int n, int depth) {
@@ -758,10 +740,11 @@ StrategyChoices parseStrategies(const Settings& settings) {
 RunResult runPipeline(const Problem& problem, const Settings& settings, const Progress& progress,
                       const Notice& notice) {
   checkDepths(settings.depth, settings.maxDepth, problem.n(), problem.path);
-  // A connection builds the k its capabilities declare: refuse other k before any work.
   // Every strategy spec is checked before any work (UsageError on a bad name or parameter).
   const StrategyChoices choices = parseStrategies(settings);
-  checkConnectionK(problem, connectionRegistry().find(choices.connection.name).spec);
+  // A connection builds the k its capabilities declare: refuse other k before any work.
+  requireBuildsK(connectionRegistry().find(choices.connection.name).spec, problem.k(),
+                 problem.path + ": ");
   // Cells must stay wider than the rounding of their coordinates (and than subnormal numbers),
   // or neighbouring grid planes coincide and cells collapse.
   const double eps = std::numeric_limits<double>::epsilon();

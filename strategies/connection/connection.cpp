@@ -36,6 +36,19 @@ std::string connectionsThat(const std::function<bool(const Capabilities&)>& can,
   return names;
 }
 
+void requireBuildsK(const ModelSpec& connection, int k, const std::string& where) {
+  const Capabilities& can = connection.capabilities;
+  if (can.builds(k)) return;
+  const std::string others = connectionsThat([k](const Capabilities& c) { return c.builds(k); });
+  const std::string range = can.minK == can.maxK
+                                ? std::to_string(can.minK)
+                                : std::to_string(can.minK) + ".." + std::to_string(can.maxK);
+  throw InputError(
+      where + "the " + connection.name + " connection builds k = " + range +
+      "; this problem has k = " + std::to_string(k) + " (n - m)" +
+      (others.empty() ? ", which no connection builds yet" : "; use --connection " + others));
+}
+
 Connection createConnection(const StrategyChoice& choice) {
   return connectionRegistry().find(choice.name).create(choice.parameters);
 }

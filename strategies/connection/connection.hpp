@@ -160,6 +160,11 @@ Registry<ConnectionFactory>& connectionRegistry();
 std::string connectionsThat(const std::function<bool(const Capabilities&)>& can,
                             std::string_view separator = ", ");
 
+/// InputError unless `connection` builds manifolds of dimension k (its capabilities), naming
+/// the connections that do, if any; `where` prefixes the message ("FILE: "). The pipeline calls
+/// it before any work, and each model's connect() again for direct calls.
+void requireBuildsK(const ModelSpec& connection, int k, const std::string& where = "");
+
 /// Makes the connection a parsed spec names, with its parameters.
 Connection createConnection(const StrategyChoice& choice);
 /// Makes the connection of a spec (`paper`, `paper:extra_layers=1`); UsageError on an unknown

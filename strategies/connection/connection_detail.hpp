@@ -11,20 +11,10 @@
 #include "framework/core/complex.hpp"
 #include "framework/core/grid.hpp"
 #include "framework/core/problem.hpp"
-#include "framework/core/registry.hpp"
 #include "framework/core/scalar.hpp"
 #include "framework/core/system.hpp"
 
 namespace ndc::connection_detail {
-
-/// Throws InputError unless the model's capabilities include the manifold dimension k (the
-/// pipeline checks this before any work; this guards direct calls).
-inline void requireCapableK(const ModelSpec& model, int k) {
-  const Capabilities& can = model.capabilities;
-  if (k < can.minK || k > can.maxK)
-    throw InputError("connection '" + model.name + "' handles k = " + std::to_string(can.minK) +
-                     ".." + std::to_string(can.maxK) + " only (k = " + std::to_string(k) + ")");
-}
 
 /// Squared Euclidean distance of two points of R^n.
 template <class S>

@@ -19,7 +19,7 @@ NaiveConnection NaiveConnection::create(const Parameters&) { return {}; }
 template <class S>
 ConnectionOutput<S> NaiveConnection::connect(const ConnectionInput<S>& input) const {
   using namespace connection_detail;
-  requireCapableK(spec(), input.k);
+  requireBuildsK(spec(), input.k);
   const SolutionCells& cells = input.cells;
   ConnectionOutput<S> out;
   Complex<S>& complex = out.complex;

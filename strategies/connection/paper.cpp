@@ -419,7 +419,7 @@ PaperConnection PaperConnection::create(const Parameters& parameters) {
 
 template <class S>
 ConnectionOutput<S> PaperConnection::connect(const ConnectionInput<S>& input) const {
-  connection_detail::requireCapableK(spec(), input.k);
+  requireBuildsK(spec(), input.k);
   PaperBuilder<S> builder(input, options_);
   return builder.run();
 }
