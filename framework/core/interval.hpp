@@ -89,21 +89,22 @@ Interval<double> tensorDeCasteljauEnclosure(std::span<const double> coefficients
 Interval<double> scaledQuotient(const Interval<double>& a, double factor, double divisor);
 
 /// An upper bound on ||I - Y A||_inf in outward-rounded interval arithmetic (NaN when an entry
-/// overflowed), for a point matrix Y (m x m, column-major as Eigen stores it, any m) and the interval matrix A whose
-/// entry (l, j) is `matrix[l * stride + columns[j]]` (m columns of a row-major matrix). Row i is
-/// sum_j |[delta_ij - sum_l Y_il A_lj]|: the same operations in the same order, bit for bit, as
-/// Interval<double> arithmetic, with one rounding-mode switch per call. A bound below 1 proves
-/// every real matrix in A regular (the graph certificate, strategies/connection/certificate.hpp).
+/// overflowed), for a point matrix Y (m x m, column-major as Eigen stores it, any m) and the
+/// interval matrix A whose entry (l, j) is `matrix[l * stride + columns[j]]` (m columns of a
+/// row-major matrix). Row i is sum_j |[delta_ij - sum_l Y_il A_lj]|: the same operations in the
+/// same order, bit for bit, as Interval<double> arithmetic, with one rounding-mode switch per call.
+/// A bound below 1 proves every real matrix in A regular (the graph certificate,
+/// strategies/connection/crossing/certificate.hpp).
 double identityResidualNorm(int m, std::span<const double> y,
                             std::span<const Interval<double>> matrix, std::size_t stride,
                             std::span<const int> columns);
 
 /// The Krawczyk operator K(X) = y - Y F(y) + (I - Y J(X)) (X - y) of an m x m system, in
 /// outward-rounded interval arithmetic with one rounding-mode switch per call (any m): `y` the
-/// point (m), `inverse` Y (m x m, column-major as Eigen stores it), `fy` an enclosure of F(y) (m), `jx` J(X) (m x m,
-/// row-major), X = [lo, hi]. Writes K's rows to kLower and kUpper (NaN ends where an entry
-/// overflowed). The same operations in the same order as Interval<double> arithmetic, with X - y
-/// enclosed outward as [lo - y, hi - y].
+/// point (m), `inverse` Y (m x m, column-major as Eigen stores it), `fy` an enclosure of F(y) (m),
+/// `jx` J(X) (m x m, row-major), X = [lo, hi]. Writes K's rows to kLower and kUpper (NaN ends where
+/// an entry overflowed). The same operations in the same order as Interval<double> arithmetic, with
+/// X - y enclosed outward as [lo - y, hi - y].
 void krawczykOperator(int m, std::span<const double> y, std::span<const double> inverse,
                       std::span<const Interval<double>> fy, std::span<const Interval<double>> jx,
                       std::span<const double> lo, std::span<const double> hi,

@@ -1,7 +1,7 @@
 /// \file iteration.hpp
 /// What the Newton-type iterations share: the projection's minimum-norm Newton
 /// (strategies/projection/newton.cpp), the crossing connection's square face Newton
-/// (strategies/connection/crossing.cpp) and the singular point search's Gauss-Newton
+/// (strategies/connection/crossing/face_solver.cpp) and the singular point search's Gauss-Newton
 /// (framework/pipeline/singular.cpp). They solve different systems (m x n for the minimum-norm
 /// step, m x m on a face, 2n + m - 1 unknowns for a singular point), so each keeps its step; the
 /// stopping rules and the step-halving line search are these, once.

@@ -19,6 +19,7 @@
 ///    and slots, so every output is independent of the thread count and the task order.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <span>
@@ -98,6 +99,13 @@ struct LeafTable {
     hasTrouble.resize(leaves, 0);
     unprovenOf.resize(leaves);
     block.resize(leaves, -1);
+  }
+
+  /// The flags a pass over the faces sets (unproven, stuck, singular) cleared, before the pass.
+  void clearFaceFlags() {
+    std::fill(unproven.begin(), unproven.end(), 0);
+    std::fill(stuck.begin(), stuck.end(), 0);
+    std::fill(singular.begin(), singular.end(), 0);
   }
 
   /// No rows.
@@ -200,7 +208,7 @@ class AdaptiveCrossing {
     std::int32_t from = 0, end = 0;
     std::vector<std::int32_t> leaves;        ///< the active leaves that may be crossed
     std::vector<std::int8_t> prior;          ///< and their perLeaf_.empty when the window started
-    std::vector<std::uint64_t> priorFacets;  ///< and their facetsMet_
+    std::vector<std::uint64_t> priorFacets;  ///< and their perLeaf_.facetsMet
     std::vector<const RootForms*> forms;
     std::vector<LeafFaces> slots;  ///< per leaf from `from` on
     std::size_t used = 0;          ///< the slots holding answers of the window's last use
@@ -282,8 +290,7 @@ class AdaptiveCrossing {
   /// level (or the leaf budget is spent). Returns the degenerate crossings of the last pass.
   std::int64_t refineAndCertify();
 
-  // ---- chord_refinement.cpp: --tolerance: the leaves whose mesh is farther than the chord error
-  // from M
+  // ---- chord_refinement.cpp: --tolerance, the leaves whose mesh is beyond the chord error
   /// `--tolerance`: the leaves below the maximum level that are nodes of a mesh polygon inside
   /// the domain whose simplices have a barycentre farther than the tolerance from its Newton
   /// projection onto M (the analysis's chord error; the polygons at the domain's boundary, whose
@@ -438,8 +445,7 @@ class AdaptiveCrossing {
                             const Box<S>& box, const std::vector<int>& freeAxes,
                             const FaceEnds& ends) const;
 
-  // ---- leaf_certificate.cpp: each leaf's certificate: graph tests, face graph tests, link, domain
-  // boundary
+  // ---- leaf_certificate.cpp: each leaf's certificate (graphs, face graphs, link, boundary)
   /// The certificate of every active leaf (docs/certificate.md) into perLeaf_.failure.
   void certify();
   /// The certificate of active leaf c into perLeaf_.failure[c]. It writes only what belongs to c

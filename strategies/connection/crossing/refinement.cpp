@@ -42,9 +42,7 @@ std::int64_t AdaptiveCrossing<S>::refineAndCertify() {
   solutionChildren_ = 0;
   budgetSpent_ = false;
   while (true) {
-    std::fill(perLeaf_.unproven.begin(), perLeaf_.unproven.end(), 0);
-    std::fill(perLeaf_.stuck.begin(), perLeaf_.stuck.end(), 0);
-    std::fill(perLeaf_.singular.begin(), perLeaf_.singular.end(), 0);
+    perLeaf_.clearFaceFlags();
     const std::int64_t degenerate = crossFaces();
     grow();
     certify();
