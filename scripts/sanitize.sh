@@ -13,7 +13,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# The subset: these tags of tests/*.cpp, without the [slow] and hidden tests (a Catch2 v2 test
+# The subset: these tags of tests/ (every folder), without the [slow] and hidden tests (a Catch2 v2 test
 # spec: a comma is "or", juxtaposition "and").
 subset=
 # ([applications] is left out: its solves take minutes each under ASan, e.g. 340 s for the

@@ -3,7 +3,7 @@
 # screen (docs/architecture.md: no function over about 80 lines in framework/ or strategies/,
 # none over 120 anywhere).
 # Usage: scripts/sizes.sh [N] [DIR...]   the N largest of each (default 15) under DIR
-#                                         (default framework strategies experiments)
+#                                         (default framework strategies pipeline applications experiments)
 # A function is a brace block that opens at the end of a line holding a signature's closing
 # parenthesis outside any other function (control statements and lambdas are not functions);
 # its length runs from that line to its closing brace. It is a heuristic over the text, exact
@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 count=15
 if [[ $# -gt 0 && $1 =~ ^[0-9]+$ ]]; then count=$1; shift; fi
 dirs=("$@")
-[[ ${#dirs[@]} -gt 0 ]] || dirs=(framework strategies experiments)
+[[ ${#dirs[@]} -gt 0 ]] || dirs=(framework strategies pipeline applications experiments)
 mapfile -t files < <(find "${dirs[@]}" -name '*.cpp' -o -name '*.hpp' -o -name '*.inl' | sort)
 [[ ${#files[@]} -gt 0 ]] || { echo "sizes: no sources under ${dirs[*]}" >&2; exit 2; }
 

@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "framework/applications/load.hpp"
-#include "framework/core/problem.hpp"
-#include "framework/core/scalar.hpp"
+#include "applications/load.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/problem/problem.hpp"
 
 namespace ndc::test {
 

@@ -8,7 +8,7 @@
 #include <set>
 #include <sstream>
 
-#include "framework/core/errors.hpp"
+#include "framework/util/errors.hpp"
 
 namespace ndc::report {
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "experiments/report/gnuplot.hpp"
-#include "framework/core/io.hpp"
+#include "framework/io/io.hpp"
 
 namespace ndc::report {
 

@@ -30,13 +30,13 @@
 #include "experiments/report/gnuplot.hpp"
 #include "experiments/report/stats.hpp"
 #include "experiments/report/table.hpp"
-#include "framework/core/io.hpp"
+#include "framework/io/io.hpp"
 
 namespace ndc::report {
 
 // --- Reading run outputs -----------------------------------------------------------------------
 
-/// The PLY reader lives in core beside the writer (framework/core/io.hpp); these names keep
+/// The PLY reader lives in core beside the writer (framework/io/io.hpp); these names keep
 /// `ndc::report::PlyMesh` and `ndc::report::readPly` working.
 using ndc::PlyMesh;
 using ndc::readPly;

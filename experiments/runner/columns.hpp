@@ -1,7 +1,7 @@
 /// \file columns.hpp
 /// The columns of an experiment's combined CSV `<id>.csv` (docs/experiments.md): the run's
 /// identity and settings (kExperimentRunColumns), then the numeric fields of its summary.json
-/// (kExperimentSummaryColumns, taken from the summary schema, framework/core/summary_schema.hpp),
+/// (kExperimentSummaryColumns, taken from the summary schema, framework/io/summary_schema.hpp),
 /// then any other numeric summary field, sorted by name. The report names the columns it reads
 /// with `_column`, which checks them against these lists when it is compiled.
 #pragma once
@@ -11,7 +11,7 @@
 #include <cstddef>
 #include <string_view>
 
-#include "framework/core/summary_schema.hpp"
+#include "framework/io/summary_schema.hpp"
 
 namespace ndc {
 

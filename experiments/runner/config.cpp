@@ -15,12 +15,12 @@
 #include <string_view>
 #include <vector>
 
+#include "applications/load.hpp"
 #include "experiments/runner/generate.hpp"
 #include "experiments/runner/runner_internal.hpp"
-#include "framework/applications/load.hpp"
-#include "framework/core/errors.hpp"
-#include "framework/core/toml_reader.hpp"
-#include "framework/pipeline/pipeline.hpp"
+#include "framework/problem/toml_reader.hpp"
+#include "framework/util/errors.hpp"
+#include "pipeline/pipeline.hpp"
 #include "strategies/bounding/bounding.hpp"
 #include "strategies/classification/classification.hpp"
 #include "strategies/connection/connection.hpp"

@@ -20,11 +20,11 @@
 #include <thread>
 
 #include "experiments/runner/runner_internal.hpp"
-#include "framework/core/budget.hpp"
-#include "framework/core/errors.hpp"
-#include "framework/core/expectation.hpp"
-#include "framework/core/io.hpp"
-#include "framework/core/parallel.hpp"
+#include "framework/io/io.hpp"
+#include "framework/numeric/parallel.hpp"
+#include "framework/problem/budget.hpp"
+#include "framework/problem/expectation.hpp"
+#include "framework/util/errors.hpp"
 
 namespace ndc {
 namespace fs = std::filesystem;

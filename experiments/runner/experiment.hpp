@@ -15,9 +15,9 @@
 #include <vector>
 
 #include "experiments/runner/columns.hpp"  // kExperimentRunColumns, kExperimentSummaryColumns
-#include "framework/core/json.hpp"         // flattenJsonNumbers, which reads the runs' summary.json
-#include "framework/core/problem.hpp"
-#include "framework/core/summary.hpp"
+#include "framework/problem/problem.hpp"
+#include "framework/problem/summary.hpp"
+#include "framework/util/json.hpp"  // flattenJsonNumbers, which reads the runs' summary.json
 
 namespace ndc {
 

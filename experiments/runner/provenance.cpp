@@ -23,7 +23,7 @@
 #include <vector>
 
 #include "experiments/runner/runner_internal.hpp"
-#include "framework/core/io.hpp"
+#include "framework/io/io.hpp"
 
 extern char** environ;
 

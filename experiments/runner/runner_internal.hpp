@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "experiments/runner/experiment.hpp"
-#include "framework/core/summary.hpp"
+#include "framework/problem/summary.hpp"
 
 namespace ndc::runner_detail {
 

@@ -17,8 +17,8 @@
 #include <thread>
 
 #include "experiments/runner/runner_internal.hpp"
-#include "framework/core/errors.hpp"
-#include "framework/core/io.hpp"
+#include "framework/io/io.hpp"
+#include "framework/util/errors.hpp"
 
 namespace ndc {
 namespace fs = std::filesystem;

@@ -19,8 +19,8 @@
 #include <thread>
 #include <vector>
 
-#include "framework/core/errors.hpp"
-#include "framework/core/json.hpp"
+#include "framework/util/errors.hpp"
+#include "framework/util/json.hpp"
 
 extern char** environ;
 

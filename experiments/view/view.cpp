@@ -16,10 +16,10 @@
 
 #include "experiments/report/csv.hpp"
 #include "experiments/view/embedded.hpp"
-#include "framework/core/errors.hpp"
-#include "framework/core/io.hpp"
-#include "framework/core/json.hpp"
-#include "framework/core/problem.hpp"
+#include "framework/io/io.hpp"
+#include "framework/problem/problem.hpp"
+#include "framework/util/errors.hpp"
+#include "framework/util/json.hpp"
 
 namespace ndc::view {
 namespace {

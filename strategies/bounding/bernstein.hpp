@@ -4,12 +4,12 @@
 
 #include <vector>
 
-#include "framework/core/bernstein.hpp"
-#include "framework/core/box.hpp"
-#include "framework/core/problem.hpp"
-#include "framework/core/registry.hpp"
-#include "framework/core/scalar.hpp"
-#include "framework/core/strategy.hpp"
+#include "framework/numeric/bernstein.hpp"
+#include "framework/numeric/box.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/problem/problem.hpp"
+#include "framework/strategy/registry.hpp"
+#include "framework/strategy/strategy.hpp"
 
 namespace ndc {
 
@@ -45,7 +45,7 @@ class BernsteinBounding final {
     std::vector<S> point;
     S pointError = 0;
     bool hasPoint = false;
-    /// Where Newton's iteration for this box's point starts: a point of the linearised zero
+    /// Where Newton's iteration for this box's point starts: a point of the linearized zero
     /// set inside the box that its test found (valid when hasStart), else the centre.
     mutable std::vector<S> start;
     mutable bool hasStart = false;

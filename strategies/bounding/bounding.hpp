@@ -1,16 +1,16 @@
 /// \file bounding.hpp
 /// The bounding strategies of the subdivision stage (paper Sec. 4, ZeroSetSubdiv in step (1)
 /// of Algorithm 1): can a box contain a common zero of every F_i? Models of the concept
-/// BoundingStrategy (framework/core/strategy.hpp), chosen at run time by name.
+/// BoundingStrategy (framework/strategy/strategy.hpp), chosen at run time by name.
 #pragma once
 
 #include <string_view>
 #include <variant>
 
-#include "framework/core/box.hpp"
-#include "framework/core/problem.hpp"
-#include "framework/core/registry.hpp"
-#include "framework/core/scalar.hpp"
+#include "framework/numeric/box.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/problem/problem.hpp"
+#include "framework/strategy/registry.hpp"
 #include "strategies/bounding/bernstein.hpp"
 #include "strategies/bounding/interval.hpp"
 #include "strategies/bounding/linearized.hpp"

@@ -4,8 +4,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "framework/core/box.hpp"
-#include "framework/core/problem.hpp"
+#include "framework/numeric/box.hpp"
+#include "framework/problem/problem.hpp"
 
 namespace ndc::bounding_detail {
 

@@ -4,13 +4,13 @@
 
 #include <vector>
 
-#include "framework/core/box.hpp"
-#include "framework/core/expression.hpp"
-#include "framework/core/interval.hpp"
-#include "framework/core/problem.hpp"
-#include "framework/core/registry.hpp"
-#include "framework/core/scalar.hpp"
-#include "framework/core/strategy.hpp"
+#include "framework/numeric/box.hpp"
+#include "framework/numeric/interval.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/problem/expression.hpp"
+#include "framework/problem/problem.hpp"
+#include "framework/strategy/registry.hpp"
+#include "framework/strategy/strategy.hpp"
 
 namespace ndc {
 

@@ -137,7 +137,7 @@ void LinearizedBounding<S>::carryPoint(const State& parent, State& lower, State&
   const std::vector<S>* x = &parent.point;
   S error = parent.pointError;
   if (!parent.hasPoint) {
-    // Without a point of the linearised zero set in the box (its test ran the multiplier
+    // Without a point of the linearized zero set in the box (its test ran the multiplier
     // search instead), M rarely meets the box where Newton's iteration from the centre ends.
     if (!parent.hasStart || !newtonPoint(parent, error)) return;
     x = &newtonX_;
@@ -290,7 +290,7 @@ bool LinearizedBounding<S>::linearise() const {
 
 template <class S>
 bool LinearizedBounding<S>::lineariseRows(bool affine) const {
-  // 2. The linearised system J_c d = -g, g in G = mu_i +- rho_i: F(c) enclosed at the point,
+  // 2. The linearized system J_c d = -g, g in G = mu_i +- rho_i: F(c) enclosed at the point,
   // J_c = mid J(X), r_i = sum_j mag(J_ij(X) - J_c,ij) h_j = sum_j rad J_ij(X) h_j (mean value
   // theorem); for a quadratic J_c = mid grad F(c) and the Taylor remainder (class comment).
   using std::abs;

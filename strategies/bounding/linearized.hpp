@@ -1,5 +1,5 @@
 /// \file linearized.hpp
-/// Linearised bounding (`linearized`, the default): the Bernstein hull or mean-value form per
+/// Linearized bounding (`linearized`, the default): the Bernstein hull or mean-value form per
 /// equation, then a test of all equations together on their linearisation.
 #pragma once
 
@@ -9,24 +9,24 @@
 #include <variant>
 #include <vector>
 
-#include "framework/core/bernstein.hpp"
-#include "framework/core/box.hpp"
-#include "framework/core/expression.hpp"
-#include "framework/core/interval.hpp"
-#include "framework/core/linearised_system.hpp"
-#include "framework/core/midrad.hpp"
-#include "framework/core/minimum_norm.hpp"
-#include "framework/core/multipliers.hpp"
-#include "framework/core/problem.hpp"
-#include "framework/core/registry.hpp"
-#include "framework/core/scalar.hpp"
-#include "framework/core/strategy.hpp"
-#include "framework/core/system.hpp"
+#include "framework/numeric/bernstein.hpp"
+#include "framework/numeric/box.hpp"
+#include "framework/numeric/interval.hpp"
+#include "framework/numeric/linearized_system.hpp"
+#include "framework/numeric/midrad.hpp"
+#include "framework/numeric/minimum_norm.hpp"
+#include "framework/numeric/multipliers.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/problem/expression.hpp"
+#include "framework/problem/problem.hpp"
+#include "framework/problem/system.hpp"
+#include "framework/strategy/registry.hpp"
+#include "framework/strategy/strategy.hpp"
 #include "strategies/bounding/bernstein.hpp"
 
 namespace ndc {
 
-/// Linearised bounding (`linearized`): a per-equation test of every F_i on its own, then,
+/// Linearized bounding (`linearized`): a per-equation test of every F_i on its own, then,
 /// for boxes that pass it and when m >= 2, a test of the m equations *together* on their
 /// linearisation. In codimension m >= 2 the per-equation tests keep every box that meets each
 /// hypersurface F_i = 0 separately, i.e. a neighbourhood of their pairwise intersections far
@@ -41,7 +41,7 @@ namespace ndc {
 /// midpoint-radius evaluation the simultaneous test uses: for total degree <= 2 it is as tight
 /// as the hull up to O(h^2) (the exact range for an affine F_i), while the dense form is
 /// exponential in n where the tape is not (a sphere in R^8 has 3^8 = 6561 coefficients, whose
-/// halving and scan per box cost more than the whole linearised test). Above degree 2 the hull
+/// halving and scan per box cost more than the whole linearized test). Above degree 2 the hull
 /// is kept in any dimension: the mean-value form of a high-degree F_i is far looser.
 ///
 /// Derivation. Let X be the box, c its centre, h_j >= |x_j - c_j| on X, J(X) an interval
@@ -60,20 +60,20 @@ namespace ndc {
 ///    D = I - J^+ J_c - N N^T (zero up to rounding), so some t must satisfy
 ///    |(N t)_j - (J^+ mid G)_j| <= h_j + (|J^+| rad G)_j + (|D| h)_j for every axis j; this
 ///    is checked by interval constraint propagation on t (exact when k = n - m = 1: the
-///    linearised curve is a thickened line and the test is whether it meets the box).
+///    linearized curve is a thickened line and the test is whether it meets the box).
 ///  - multiplier test: every common zero also satisfies y^T (F(c) + J_c d + s) = 0, |s_i| <=
 ///    rad G_i, for any multipliers y in R^m, which is impossible when
 ///    |y . mid G| > sum_i |y_i| rad G_i + sum_j |(J_c^T y)_j| h_j. By Farkas' lemma such a y
-///    exists exactly when the linearised system has no solution d in the box; the tests
+///    exists exactly when the linearized system has no solution d in the box; the tests
 ///    above are this test for particular y (the rows of P) or relaxations of it, and each mixes
 ///    the remainders of all equations, so a box that misses the common zeros of the affine
 ///    equations alone (a flat) can pass them when one curved equation has a large remainder.
 ///    The y is found by reweighted least squares (MultiplierTest, at most
 ///    kMultiplierIterations steps) and checked with bounded rounding, so an inexact y only
 ///    discards fewer boxes.
-///  - contraction: a box these tests keep without a point of the linearised zero set has all
+///  - contraction: a box these tests keep without a point of the linearized zero set has all
 ///    its zeros in c + [lo, hi], the bounds on d_j that the null-space test leaves
-///    (LinearisedSystem::solutionBox); where that sub-box is small (|h'|^2 below kContraction
+///    (LinearizedSystem::solutionBox); where that sub-box is small (|h'|^2 below kContraction
 ///    |h|^2) the tests run once more on the sub-box's own linearisation, whose remainder is
 ///    smaller (docs/subdivision.md, "Contraction").
 /// For an equation of total degree 2 without piecewise leaves the remainder is that of its
@@ -91,8 +91,8 @@ namespace ndc {
 /// of the largest row) skips the test and keeps the box.
 ///
 /// F(c) and J(X) come from the equations' tapes evaluated in midpoint-radius arithmetic
-/// (MidRadEvaluator, framework/core/midrad.hpp) (rounding-to-nearest, every rounding error added to
-/// the radius): as rigorous as outward-rounded intervals, without switching rounding modes per
+/// (MidRadEvaluator, framework/numeric/midrad.hpp) (rounding-to-nearest, every rounding error added
+/// to the radius): as rigorous as outward-rounded intervals, without switching rounding modes per
 /// operation. The test is only enabled when it can pay: m <= n and some two equations share a
 /// variable (for equations in disjoint variables, like the Clifford torus, the per-equation tests
 /// already decide the system, and `linearized` is `bernstein`). Scratch buffers make
@@ -108,7 +108,7 @@ class LinearizedBounding final {
   using State = typename BernsteinBounding<S>::State;
 
   /// Converts the equations to Bernstein form on `domain` (as BernsteinBounding) and prepares
-  /// their midpoint-radius evaluators for the linearised test.
+  /// their midpoint-radius evaluators for the linearized test.
   LinearizedBounding(const Problem& problem, const Box<S>& domain);
 
   /// Number of variables n.
@@ -126,11 +126,11 @@ class LinearizedBounding final {
     carryPoint(parent, lower, upper);
   }
   /// Alg. 1 step (1): false when a Bernstein hull excludes 0 or, for m >= 2, when the
-  /// linearised system has no solution in the box (see the class comment). A box that holds a
+  /// linearized system has no solution in the box (see the class comment). A box that holds a
   /// point of M (State::point) is kept without the tests, which could not discard it.
   bool mayContainZero(const State& state) const;
 
-  /// The simultaneous test alone (for tests): true when the linearised system proves that
+  /// The simultaneous test alone (for tests): true when the linearized system proves that
   /// `box` holds no common zero.
   bool linearizationExcludes(const Box<S>& box) const;
   /// The mean-value test of the equations without a patch alone (for tests): true when one of
@@ -202,7 +202,7 @@ class LinearizedBounding final {
   // Scratch of linearizationExcludes, sized once.
   mutable std::vector<S> c_, zero_;     // the box's centre; zero radii
   mutable std::vector<S> spread_;       // MidRadEvaluator::gradientSpread
-  mutable LinearisedSystem<S> system_;  // steps 2 to 8
+  mutable LinearizedSystem<S> system_;  // steps 2 to 8
   mutable std::vector<S> dLo_, dHi_;    // contractedExcludes: the solutions' d
   mutable Box<S> contracted_;           // and their box
   // Scratch of newtonPoint.

@@ -2,8 +2,8 @@
 
 #include <string>
 
-#include "framework/core/errors.hpp"
-#include "framework/core/parallel.hpp"
+#include "framework/numeric/parallel.hpp"
+#include "framework/util/errors.hpp"
 
 namespace ndc {
 

@@ -10,12 +10,12 @@
 #include <variant>
 #include <vector>
 
-#include "framework/core/box.hpp"
-#include "framework/core/complex.hpp"
-#include "framework/core/grid.hpp"
-#include "framework/core/registry.hpp"
-#include "framework/core/scalar.hpp"
-#include "framework/core/strategy.hpp"
+#include "framework/mesh/complex.hpp"
+#include "framework/numeric/box.hpp"
+#include "framework/numeric/grid.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/strategy/registry.hpp"
+#include "framework/strategy/strategy.hpp"
 
 namespace ndc {
 

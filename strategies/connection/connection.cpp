@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "framework/core/errors.hpp"
+#include "framework/util/errors.hpp"
 
 namespace ndc {
 

@@ -11,9 +11,9 @@
 #include <utility>
 #include <variant>
 
-#include "framework/core/registry.hpp"
-#include "framework/core/scalar.hpp"
-#include "framework/core/strategy.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/strategy/registry.hpp"
+#include "framework/strategy/strategy.hpp"
 #include "strategies/connection/crossing.hpp"
 
 namespace ndc {

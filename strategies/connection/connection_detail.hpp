@@ -8,11 +8,11 @@
 #include <unordered_map>
 #include <vector>
 
-#include "framework/core/complex.hpp"
-#include "framework/core/grid.hpp"
-#include "framework/core/problem.hpp"
-#include "framework/core/scalar.hpp"
-#include "framework/core/system.hpp"
+#include "framework/mesh/complex.hpp"
+#include "framework/numeric/grid.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/problem/problem.hpp"
+#include "framework/problem/system.hpp"
 
 namespace ndc::connection_detail {
 

@@ -2,8 +2,8 @@
 /// `crossing`: watertight dual contouring in any dimension (docs/crossing.md; beyond the paper).
 #pragma once
 
-#include "framework/core/registry.hpp"
-#include "framework/core/strategy.hpp"
+#include "framework/strategy/registry.hpp"
+#include "framework/strategy/strategy.hpp"
 
 namespace ndc {
 

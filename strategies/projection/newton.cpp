@@ -6,10 +6,10 @@
 #include <stdexcept>
 #include <string>
 
-#include "framework/core/errors.hpp"
-#include "framework/core/iteration.hpp"
-#include "framework/core/minimum_norm.hpp"
-#include "framework/core/parallel.hpp"
+#include "framework/numeric/iteration.hpp"
+#include "framework/numeric/minimum_norm.hpp"
+#include "framework/numeric/parallel.hpp"
+#include "framework/util/errors.hpp"
 
 namespace ndc {
 
@@ -173,7 +173,7 @@ Projections<S> projectCells(const Projection<S>& projection, const SolutionCells
   out.iterations.resize(count);
   //! [project-cells]
   // One dispatch for the whole stage, not one per cell; the cells in parallel, each writing its
-  // own slots (framework/core/parallel.hpp), in blocks so that progress is reported in order.
+  // own slots (framework/numeric/parallel.hpp), in blocks so that progress is reported in order.
   std::visit(
       [&](const auto& strategy) {
         const std::size_t block = std::max<std::size_t>(1024, count / 100);

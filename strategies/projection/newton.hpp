@@ -12,14 +12,14 @@
 #include <variant>
 #include <vector>
 
-#include "framework/core/box.hpp"
-#include "framework/core/complex.hpp"
-#include "framework/core/grid.hpp"
-#include "framework/core/magnitude.hpp"
-#include "framework/core/registry.hpp"
-#include "framework/core/scalar.hpp"
-#include "framework/core/strategy.hpp"
-#include "framework/core/system.hpp"
+#include "framework/mesh/complex.hpp"
+#include "framework/numeric/box.hpp"
+#include "framework/numeric/grid.hpp"
+#include "framework/numeric/magnitude.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/problem/system.hpp"
+#include "framework/strategy/registry.hpp"
+#include "framework/strategy/strategy.hpp"
 
 namespace ndc {
 

@@ -9,7 +9,7 @@
 #include <thread>
 #include <vector>
 
-#include "framework/core/parallel.hpp"
+#include "framework/numeric/parallel.hpp"
 
 namespace ndc {
 
@@ -256,7 +256,7 @@ void appendParts(const std::vector<CellList>& parts, SolutionCells& cells) {
   cells.lookup.addCount(first.back() - first.front());
 }
 
-/// ZeroSetSubdiv with the subtrees below topDepth as parallel tasks (framework/core/
+/// ZeroSetSubdiv with the subtrees below topDepth as parallel tasks (framework/numeric/
 /// parallel.hpp): the top is traversed in stages (topSubtrees), each subtree writes its own
 /// CellList, and the lists are appended in depth-first order of their roots. So the cells,
 /// their order and `visited` are those of the sequential traversal, and the budget is exceeded

@@ -12,15 +12,15 @@
 /// when the bounding is monotone (a sub-box of a discarded box is discarded too). The Bernstein
 /// hull is, up to rounding: a sub-box's coefficients are convex combinations of its parent's.
 /// The mean-value form of the interval test is not monotone in general, but the two agreed on
-/// every test problem (tests/test_subdivision.cpp).
+/// every test problem (tests/strategies/test_subdivision.cpp).
 #pragma once
 
 #include <array>
 #include <string_view>
 #include <variant>
 
-#include "framework/core/grid.hpp"
-#include "framework/core/strategy.hpp"
+#include "framework/numeric/grid.hpp"
+#include "framework/strategy/strategy.hpp"
 #include "strategies/bounding/bounding.hpp"
 
 namespace ndc {
@@ -74,9 +74,9 @@ Subdivision createSubdivision(std::string_view spec);
 /// pair of bounding states per depth plus the output, so it grows with the number of solution
 /// cells, not with 2^(n L). `progress`, when set, receives ("subdivision", share of the domain's
 /// volume done) at most about 100 times. Throws InputError when the grid does not fit a CellKey
-/// (the packed cell index needs n * L <= 128), std::invalid_argument when grid and bounding disagree
-/// on n. `maxCells` > 0 is a budget: when more solution cells are found the traversal stops with
-/// ndc::CellBudgetExceeded (a zero set of a higher dimension than the problem's k).
+/// (the packed cell index needs n * L <= 128), std::invalid_argument when grid and bounding
+/// disagree on n. `maxCells` > 0 is a budget: when more solution cells are found the traversal
+/// stops with ndc::CellBudgetExceeded (a zero set of a higher dimension than the problem's k).
 template <class S>
 SolutionCells subdivide(const Bounding<S>& bounding, const Subdivision& subdivision,
                         const Grid& grid, const Progress& progress = {}, std::int64_t maxCells = 0);

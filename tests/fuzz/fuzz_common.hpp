@@ -14,13 +14,13 @@
 #include <string>
 #include <vector>
 
-#include "framework/applications/load.hpp"
-#include "framework/core/application.hpp"
-#include "framework/core/bernstein.hpp"
-#include "framework/core/expression.hpp"
-#include "framework/core/interval.hpp"
-#include "framework/core/problem.hpp"
-#include "framework/core/scalar.hpp"
+#include "applications/load.hpp"
+#include "framework/numeric/bernstein.hpp"
+#include "framework/numeric/interval.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/problem/application.hpp"
+#include "framework/problem/expression.hpp"
+#include "framework/problem/problem.hpp"
 
 namespace ndc::fuzz {
 

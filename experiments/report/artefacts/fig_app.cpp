@@ -20,7 +20,7 @@
 #include "experiments/report/artefacts/builders.hpp"
 #include "experiments/report/artefacts/common.hpp"
 #include "experiments/report/perspective.hpp"
-#include "framework/core/toml_reader.hpp"
+#include "framework/problem/toml_reader.hpp"
 
 namespace ndc::report::detail {
 namespace {

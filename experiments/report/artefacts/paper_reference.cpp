@@ -9,7 +9,7 @@
 #include <toml++/toml.h>
 
 #include "experiments/report/artefacts/common.hpp"
-#include "framework/core/toml_reader.hpp"
+#include "framework/problem/toml_reader.hpp"
 
 namespace ndc::report {
 namespace detail {

@@ -8,7 +8,7 @@
 #include <string>
 #include <unordered_map>
 
-#include "framework/core/budget.hpp"
+#include "framework/problem/budget.hpp"
 #include "strategies/connection/crossing.hpp"
 #include "strategies/connection/crossing/dual_complex.hpp"
 

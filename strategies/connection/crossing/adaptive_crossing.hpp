@@ -27,15 +27,15 @@
 #include <utility>
 #include <vector>
 
-#include "framework/core/bernstein.hpp"
-#include "framework/core/box.hpp"
-#include "framework/core/cell_forms.hpp"
-#include "framework/core/flat_map.hpp"
-#include "framework/core/grid.hpp"
-#include "framework/core/interval.hpp"
-#include "framework/core/parallel.hpp"
-#include "framework/core/scalar.hpp"
-#include "framework/core/strategy.hpp"
+#include "framework/numeric/bernstein.hpp"
+#include "framework/numeric/box.hpp"
+#include "framework/numeric/grid.hpp"
+#include "framework/numeric/interval.hpp"
+#include "framework/numeric/parallel.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/problem/cell_forms.hpp"
+#include "framework/strategy/strategy.hpp"
+#include "framework/util/flat_map.hpp"
 #include "strategies/connection/crossing/cell_tree.hpp"
 #include "strategies/connection/crossing/certificate.hpp"
 #include "strategies/connection/crossing/dual_polygon.hpp"
@@ -412,7 +412,7 @@ class AdaptiveCrossing {
   /// is unknown (perLeaf_.bandEmpty[c] is set too; the caller has grown the per-leaf table).
   bool emptyOf(std::int32_t c, const LeafFaces& known);
   /// Whether the leaf's affine model proves that no level set F = t c, t in [0, 1], meets it
-  /// (bandExcluded: the linearised system's tests on the model; docs/crossing.md, "Empty leaves
+  /// (bandExcluded: the linearized system's tests on the model; docs/crossing.md, "Empty leaves
   /// by the model"). Then restrictLeaf would find the leaf empty with its band too, or fail to
   /// prove what this proves: the Bernstein forms are not needed.
   bool modelExcludesBand(const LeafModel<S>& model) const;

@@ -7,8 +7,8 @@
 #include <span>
 #include <vector>
 
-#include "framework/core/flat_map.hpp"
-#include "framework/core/grid.hpp"
+#include "framework/numeric/grid.hpp"
+#include "framework/util/flat_map.hpp"
 
 namespace ndc {
 

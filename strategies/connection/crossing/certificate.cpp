@@ -1,7 +1,7 @@
 #include "strategies/connection/crossing/certificate.hpp"
 
-#include "framework/core/inverse.hpp"
-#include "framework/core/parallel.hpp"
+#include "framework/numeric/inverse.hpp"
+#include "framework/numeric/parallel.hpp"
 
 #include <Eigen/Dense>
 #include <boost/multiprecision/eigen.hpp>

@@ -9,9 +9,9 @@
 #include <span>
 #include <vector>
 
-#include "framework/core/bernstein.hpp"
-#include "framework/core/interval.hpp"
-#include "framework/core/system.hpp"
+#include "framework/numeric/bernstein.hpp"
+#include "framework/numeric/interval.hpp"
+#include "framework/problem/system.hpp"
 
 namespace ndc {
 

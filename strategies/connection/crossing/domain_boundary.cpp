@@ -4,10 +4,10 @@
 #include <cmath>
 #include <vector>
 
-#include "framework/core/interval.hpp"
-#include "framework/core/iteration.hpp"
-#include "framework/core/minimum_norm.hpp"
-#include "framework/core/parallel.hpp"
+#include "framework/numeric/interval.hpp"
+#include "framework/numeric/iteration.hpp"
+#include "framework/numeric/minimum_norm.hpp"
+#include "framework/numeric/parallel.hpp"
 #include "strategies/connection/crossing/certificate.hpp"
 #include "strategies/connection/crossing/enclosure.hpp"
 #include "strategies/connection/crossing/jacobian_work.hpp"

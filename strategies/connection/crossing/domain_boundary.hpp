@@ -10,10 +10,10 @@
 #include <span>
 #include <vector>
 
-#include "framework/core/bernstein.hpp"
-#include "framework/core/box.hpp"
-#include "framework/core/scalar.hpp"
-#include "framework/core/system.hpp"
+#include "framework/numeric/bernstein.hpp"
+#include "framework/numeric/box.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/problem/system.hpp"
 
 namespace ndc::crossing_detail {
 

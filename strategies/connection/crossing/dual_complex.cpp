@@ -10,8 +10,8 @@
 #include <unordered_map>
 #include <vector>
 
-#include "framework/core/iteration.hpp"
-#include "framework/core/parallel.hpp"
+#include "framework/numeric/iteration.hpp"
+#include "framework/numeric/parallel.hpp"
 #include "strategies/connection/crossing/domain_boundary.hpp"
 #include "strategies/connection/crossing/jacobian_work.hpp"
 

@@ -10,9 +10,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "framework/core/box.hpp"
-#include "framework/core/scalar.hpp"
-#include "framework/core/strategy.hpp"
+#include "framework/numeric/box.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/strategy/strategy.hpp"
 #include "strategies/connection/crossing/cell_tree.hpp"
 #include "strategies/connection/crossing/dual_polygon.hpp"
 

@@ -7,10 +7,10 @@
 #include <span>
 #include <vector>
 
-#include "framework/core/interval.hpp"
-#include "framework/core/midrad.hpp"
-#include "framework/core/scalar.hpp"
-#include "framework/core/system.hpp"
+#include "framework/numeric/interval.hpp"
+#include "framework/numeric/midrad.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/problem/system.hpp"
 
 namespace ndc::crossing_detail {
 

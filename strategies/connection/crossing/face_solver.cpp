@@ -5,8 +5,8 @@
 #include <limits>
 #include <type_traits>
 
-#include "framework/core/inverse.hpp"
-#include "framework/core/iteration.hpp"
+#include "framework/numeric/inverse.hpp"
+#include "framework/numeric/iteration.hpp"
 #include "strategies/connection/crossing/certificate.hpp"
 #include "strategies/connection/crossing/enclosure.hpp"
 

@@ -9,11 +9,11 @@
 #include <span>
 #include <vector>
 
-#include "framework/core/bernstein.hpp"
-#include "framework/core/box.hpp"
-#include "framework/core/interval.hpp"
-#include "framework/core/scalar.hpp"
-#include "framework/core/system.hpp"
+#include "framework/numeric/bernstein.hpp"
+#include "framework/numeric/box.hpp"
+#include "framework/numeric/interval.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/problem/system.hpp"
 #include "strategies/connection/crossing/function_ref.hpp"
 
 namespace ndc::crossing_detail {

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "framework/core/parallel.hpp"
+#include "framework/numeric/parallel.hpp"
 
 namespace ndc::crossing_detail {
 

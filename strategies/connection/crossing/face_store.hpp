@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "framework/core/scalar.hpp"
+#include "framework/numeric/scalar.hpp"
 #include "strategies/connection/crossing/function_ref.hpp"
 
 namespace ndc::crossing_detail {

@@ -7,10 +7,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "framework/core/box.hpp"
-#include "framework/core/grid.hpp"
-#include "framework/core/scalar.hpp"
-#include "framework/core/strategy.hpp"
+#include "framework/numeric/box.hpp"
+#include "framework/numeric/grid.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/strategy/strategy.hpp"
 #include "strategies/connection/crossing/face_solver.hpp"
 
 namespace ndc::crossing_detail {

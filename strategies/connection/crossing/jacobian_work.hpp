@@ -10,8 +10,8 @@
 #include <span>
 #include <vector>
 
-#include "framework/core/scalar.hpp"
-#include "framework/core/system.hpp"
+#include "framework/numeric/scalar.hpp"
+#include "framework/problem/system.hpp"
 
 namespace ndc::crossing_detail {
 

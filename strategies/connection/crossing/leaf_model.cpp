@@ -5,10 +5,10 @@
 #include <limits>
 #include <optional>
 
-#include "framework/core/inverse.hpp"
-#include "framework/core/iteration.hpp"
-#include "framework/core/multipliers.hpp"
-#include "framework/core/parallel.hpp"
+#include "framework/numeric/inverse.hpp"
+#include "framework/numeric/iteration.hpp"
+#include "framework/numeric/multipliers.hpp"
+#include "framework/numeric/parallel.hpp"
 
 namespace ndc {
 
@@ -266,7 +266,7 @@ bool faceMultipliersExclude(const LeafModel<S>& model, const Box<S>& box, std::s
 }
 
 template <class S>
-bool fillModelSystem(const LeafModel<S>& model, LinearisedSystem<S>& system,
+bool fillModelSystem(const LeafModel<S>& model, LinearizedSystem<S>& system,
                      std::span<const S> shift, std::span<const S> widen) {
   const std::size_t m = model.valueMid.size(), n = model.centre.size();
   if (system.n() != static_cast<int>(n) || system.m() != static_cast<int>(m))
@@ -294,7 +294,7 @@ bool fillModelSystem(const LeafModel<S>& model, LinearisedSystem<S>& system,
 }
 
 template <class S>
-bool facetsOfModel(const LeafModel<S>& model, LinearisedSystem<S>& system, std::vector<char>& met) {
+bool facetsOfModel(const LeafModel<S>& model, LinearizedSystem<S>& system, std::vector<char>& met) {
   const std::size_t m = model.valueMid.size(), n = model.centre.size();
   met.assign(2 * n, 1);
   if (!model.valid || n != m + 2) return false;
@@ -303,7 +303,7 @@ bool facetsOfModel(const LeafModel<S>& model, LinearisedSystem<S>& system, std::
 }
 
 template <class S>
-bool bandExcluded(const LeafModel<S>& model, std::span<const S> level, LinearisedSystem<S>& system,
+bool bandExcluded(const LeafModel<S>& model, std::span<const S> level, LinearizedSystem<S>& system,
                   int multiplierSteps) {
   using std::abs;
   if (!model.valid) return false;
@@ -339,12 +339,12 @@ template bool faceKrawczykExcludes(const LeafModel<double>& model,
                                    std::span<const int> axes, int side);
 template bool faceMultipliersExclude(const LeafModel<double>& model, const Box<double>& box,
                                      std::span<const int> axes, int side, int iterations);
-template bool fillModelSystem(const LeafModel<double>& model, LinearisedSystem<double>& system,
+template bool fillModelSystem(const LeafModel<double>& model, LinearizedSystem<double>& system,
                               std::span<const double> shift, std::span<const double> widen);
-template bool facetsOfModel(const LeafModel<double>& model, LinearisedSystem<double>& system,
+template bool facetsOfModel(const LeafModel<double>& model, LinearizedSystem<double>& system,
                             std::vector<char>& met);
 template bool bandExcluded(const LeafModel<double>& model, std::span<const double> level,
-                           LinearisedSystem<double>& system, int multiplierSteps);
+                           LinearizedSystem<double>& system, int multiplierSteps);
 template void centreAndRadius(const Box<Mpfr>& box, std::vector<Mpfr>& centre,
                               std::vector<Mpfr>& radius);
 template void buildLeafModel(std::vector<MidRadEvaluator<Mpfr>>& evaluators, const Box<Mpfr>& box,
@@ -361,11 +361,11 @@ template bool faceKrawczykExcludes(const LeafModel<Mpfr>& model,
                                    std::span<const int> axes, int side);
 template bool faceMultipliersExclude(const LeafModel<Mpfr>& model, const Box<Mpfr>& box,
                                      std::span<const int> axes, int side, int iterations);
-template bool fillModelSystem(const LeafModel<Mpfr>& model, LinearisedSystem<Mpfr>& system,
+template bool fillModelSystem(const LeafModel<Mpfr>& model, LinearizedSystem<Mpfr>& system,
                               std::span<const Mpfr> shift, std::span<const Mpfr> widen);
-template bool facetsOfModel(const LeafModel<Mpfr>& model, LinearisedSystem<Mpfr>& system,
+template bool facetsOfModel(const LeafModel<Mpfr>& model, LinearizedSystem<Mpfr>& system,
                             std::vector<char>& met);
 template bool bandExcluded(const LeafModel<Mpfr>& model, std::span<const Mpfr> level,
-                           LinearisedSystem<Mpfr>& system, int multiplierSteps);
+                           LinearizedSystem<Mpfr>& system, int multiplierSteps);
 
 }  // namespace ndc

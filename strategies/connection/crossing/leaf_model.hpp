@@ -8,10 +8,10 @@
 #include <span>
 #include <vector>
 
-#include "framework/core/box.hpp"
-#include "framework/core/linearised_system.hpp"
-#include "framework/core/midrad.hpp"
-#include "framework/core/scalar.hpp"
+#include "framework/numeric/box.hpp"
+#include "framework/numeric/linearized_system.hpp"
+#include "framework/numeric/midrad.hpp"
+#include "framework/numeric/scalar.hpp"
 
 namespace ndc {
 
@@ -90,7 +90,7 @@ template <class S>
 bool faceKrawczykExcludes(const LeafModel<S>& model, const FacePreconditioner<S>& pre,
                           const Box<S>& box, std::span<const int> axes, int side);
 
-/// True when the multiplier test (framework/core/multipliers.hpp) proves that F - level has no
+/// True when the multiplier test (framework/numeric/multipliers.hpp) proves that F - level has no
 /// zero on the face of `box` (the model's leaf) that fixes `axes` (its first k entries) at the
 /// ends `side`. On the face the model gives g(d) in mu + J_free d_free +- rho, with mu and the
 /// fixed axes' part of rho as in faceKrawczykExcludes, J_free the slopes' midpoints on the free
@@ -106,28 +106,28 @@ bool faceMultipliersExclude(const LeafModel<S>& model, const Box<S>& box, std::s
 /// the value's centre moved by `shift` and its radius widened by `widen` (per equation; empty:
 /// none). Returns false when an entry is not finite.
 template <class S>
-bool fillModelSystem(const LeafModel<S>& model, LinearisedSystem<S>& system,
+bool fillModelSystem(const LeafModel<S>& model, LinearizedSystem<S>& system,
                      std::span<const S> shift, std::span<const S> widen);
 
 /// For a surface (k = 2): which facets of the model's leaf (fixed axis j at its lower end,
 /// entry 2 j, or upper end, 2 j + 1) may hold a zero of F - level, into `met` (2 n entries, 1:
 /// may), by the planar test of the model's linearisation over the whole leaf
-/// (LinearisedSystem::facetsMet, fillModelSystem). A face of dimension n - 2 lies in two
+/// (LinearizedSystem::facetsMet, fillModelSystem). A face of dimension n - 2 lies in two
 /// facets, so one facet ruled out rules out its 2 (n - 1) faces, and a leaf M_c crosses near its
 /// middle meets few facets: one O(n^2 m) test per leaf instead of a test per face
 /// (docs/crossing.md, "Facets first"). Returns true when no point of the leaf is a zero; every
 /// entry is 1 where nothing is proven.
 template <class S>
-bool facetsOfModel(const LeafModel<S>& model, LinearisedSystem<S>& system, std::vector<char>& met);
+bool facetsOfModel(const LeafModel<S>& model, LinearizedSystem<S>& system, std::vector<char>& met);
 
 /// True when the model proves that no level set F = t level, t in [0, 1], meets its leaf (the
 /// band from M to M_c, the model being of F - level): the value's centre moved by level / 2
-/// and its radius widened by |level| / 2, then the linearised system's tests
-/// (LinearisedSystem::excludes, `multiplierSteps` least-squares steps). Where it holds, the
+/// and its radius widened by |level| / 2, then the linearized system's tests
+/// (LinearizedSystem::excludes, `multiplierSteps` least-squares steps). Where it holds, the
 /// leaf is empty in the sense of the Bernstein coefficients' test (docs/crossing.md, "Empty
 /// leaves by the model"), which then need not be restricted to the leaf.
 template <class S>
-bool bandExcluded(const LeafModel<S>& model, std::span<const S> level, LinearisedSystem<S>& system,
+bool bandExcluded(const LeafModel<S>& model, std::span<const S> level, LinearizedSystem<S>& system,
                   int multiplierSteps);
 
 extern template void centreAndRadius(const Box<double>& box, std::vector<double>& centre,
@@ -150,12 +150,12 @@ extern template bool faceKrawczykExcludes(const LeafModel<double>& model,
 extern template bool faceMultipliersExclude(const LeafModel<double>& model, const Box<double>& box,
                                             std::span<const int> axes, int side, int iterations);
 extern template bool fillModelSystem(const LeafModel<double>& model,
-                                     LinearisedSystem<double>& system,
+                                     LinearizedSystem<double>& system,
                                      std::span<const double> shift, std::span<const double> widen);
-extern template bool facetsOfModel(const LeafModel<double>& model, LinearisedSystem<double>& system,
+extern template bool facetsOfModel(const LeafModel<double>& model, LinearizedSystem<double>& system,
                                    std::vector<char>& met);
 extern template bool bandExcluded(const LeafModel<double>& model, std::span<const double> level,
-                                  LinearisedSystem<double>& system, int multiplierSteps);
+                                  LinearizedSystem<double>& system, int multiplierSteps);
 extern template void centreAndRadius(const Box<Mpfr>& box, std::vector<Mpfr>& centre,
                                      std::vector<Mpfr>& radius);
 extern template void buildLeafModel(std::vector<MidRadEvaluator<Mpfr>>& evaluators,
@@ -174,11 +174,11 @@ extern template bool faceKrawczykExcludes(const LeafModel<Mpfr>& model,
                                           std::span<const int> axes, int side);
 extern template bool faceMultipliersExclude(const LeafModel<Mpfr>& model, const Box<Mpfr>& box,
                                             std::span<const int> axes, int side, int iterations);
-extern template bool fillModelSystem(const LeafModel<Mpfr>& model, LinearisedSystem<Mpfr>& system,
+extern template bool fillModelSystem(const LeafModel<Mpfr>& model, LinearizedSystem<Mpfr>& system,
                                      std::span<const Mpfr> shift, std::span<const Mpfr> widen);
-extern template bool facetsOfModel(const LeafModel<Mpfr>& model, LinearisedSystem<Mpfr>& system,
+extern template bool facetsOfModel(const LeafModel<Mpfr>& model, LinearizedSystem<Mpfr>& system,
                                    std::vector<char>& met);
 extern template bool bandExcluded(const LeafModel<Mpfr>& model, std::span<const Mpfr> level,
-                                  LinearisedSystem<Mpfr>& system, int multiplierSteps);
+                                  LinearizedSystem<Mpfr>& system, int multiplierSteps);
 
 }  // namespace ndc

@@ -110,8 +110,8 @@ void AdaptiveCrossing<S>::prefetchFacets(PrefetchedLeaf& leaf, std::uint64_t pri
   if (k_ == 2 && m_ > 1 && byEvaluation_ && priorFacets == kAllFacets) {
     modelOnce(leaf);
     thread_local std::vector<char> met;
-    std::optional<LinearisedSystem<S>> fresh;
-    facetsOfModel(leaf.model, threadScratch<S, LinearisedSystem<S>>(fresh), met);
+    std::optional<LinearizedSystem<S>> fresh;
+    facetsOfModel(leaf.model, threadScratch<S, LinearizedSystem<S>>(fresh), met);
     leaf.out.facets = facetMask(met);
   }
 }
@@ -167,9 +167,9 @@ bool AdaptiveCrossing<S>::emptyOf(std::int32_t c, const LeafFaces& known) {
 
 template <class S>
 bool AdaptiveCrossing<S>::modelExcludesBand(const LeafModel<S>& model) const {
-  std::optional<LinearisedSystem<S>> fresh;
+  std::optional<LinearizedSystem<S>> fresh;
   return bandExcluded(model, std::span<const S>(level_),
-                      threadScratch<S, LinearisedSystem<S>>(fresh), kFaceMultiplierSteps);
+                      threadScratch<S, LinearizedSystem<S>>(fresh), kFaceMultiplierSteps);
 }
 
 template <class S>

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <vector>
 
-#include "framework/core/budget.hpp"
+#include "framework/problem/budget.hpp"
 
 namespace ndc::crossing_detail {
 
