@@ -28,7 +28,7 @@
 #include "strategies/bounding/bounding.hpp"
 #include "strategies/classification/classification.hpp"
 #include "strategies/connection/connection.hpp"
-#include "strategies/projection/newton.hpp"
+#include "strategies/projection/projection.hpp"
 #include "strategies/subdivision/subdivision.hpp"
 
 namespace ndc {

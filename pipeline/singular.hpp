@@ -19,7 +19,7 @@
 #include "framework/problem/problem.hpp"
 #include "framework/problem/summary.hpp"
 #include "framework/problem/system.hpp"
-#include "strategies/projection/newton.hpp"
+#include "strategies/projection/projection.hpp"
 
 namespace ndc {
 

@@ -26,10 +26,10 @@
 #include <string_view>
 #include <vector>
 
-#include "experiments/report/csv.hpp"
 #include "experiments/report/gnuplot.hpp"
 #include "experiments/report/stats.hpp"
 #include "experiments/report/table.hpp"
+#include "experiments/runner/csv.hpp"
 #include "framework/io/io.hpp"
 
 namespace ndc::report {

@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-#include "experiments/report/csv.hpp"
+#include "experiments/runner/csv.hpp"
 
 namespace ndc::report {
 

@@ -14,7 +14,7 @@
 #include <utility>
 #include <vector>
 
-#include "experiments/report/csv.hpp"
+#include "experiments/runner/csv.hpp"
 #include "experiments/view/embedded.hpp"
 #include "framework/io/io.hpp"
 #include "framework/problem/problem.hpp"
@@ -133,7 +133,7 @@ using Box = std::vector<std::pair<double, double>>;
 std::vector<Box> uncertifiedBoxes(const fs::path& file, int n) {
   std::vector<Box> boxes;
   if (!fs::exists(file)) return boxes;
-  const report::CsvTable csv = report::readCsv(file);
+  const CsvTable csv = readCsv(file);
   for (std::size_t row = 0; row < csv.size(); ++row) {
     if (csv.cell(row, "kind") != "cell") continue;
     Box box(static_cast<std::size_t>(n));

@@ -10,12 +10,9 @@ namespace ndc {
 //! [classification-registry]
 Registry<ClassificationFactory>& classificationRegistry() {
   static Registry<ClassificationFactory> registry(
-      "classification",
-      {{{"paper",
-         "Sec. 4.1: normal when Newton converged inside the closed cell, abnormal outside, "
-         "failed when it did not converge.",
-         {}},
-        [](const Parameters&) { return holdClassification(PaperClassification{}); }}});
+      "classification", {{PaperClassification::spec(), [](const Parameters&) {
+                            return holdClassification(PaperClassification{});
+                          }}});
   return registry;
 }
 //! [classification-registry]

@@ -16,28 +16,9 @@
 #include "framework/numeric/scalar.hpp"
 #include "framework/strategy/registry.hpp"
 #include "framework/strategy/strategy.hpp"
+#include "strategies/classification/paper.hpp"
 
 namespace ndc {
-
-/// Sec. 4.1: a cell is normal if Newton converged to a point inside the closed cell
-/// (`lo_j <= p_j <= hi_j` for every axis, so a point on a face, edge or corner is inside),
-/// abnormal if it converged to a point outside, and failed if Newton did not converge.
-class PaperClassification final {
- public:
-  /// Classifies one cell from its closed box and its projected point.
-  template <class S>
-  CellClass classify(const Box<S>& cell, std::span<const S> point, bool converged) const {
-    if (!converged) return CellClass::kFailed;
-    for (int j = 0; j < cell.dim(); ++j) {
-      // Closed box: the faces belong to the cell.
-      if (!(cell.lo[j] <= point[j] && point[j] <= cell.hi[j])) return CellClass::kAbnormal;
-    }
-    return CellClass::kNormal;
-  }
-};
-
-static_assert(ClassificationStrategy<PaperClassification, double>);
-static_assert(ClassificationStrategy<PaperClassification, Mpfr>);
 
 /// A classification model that is none of the variant's own alternatives (a new strategy in
 /// one file, or a test-only one): one virtual call per cell, for both scalars.

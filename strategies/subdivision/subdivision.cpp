@@ -12,17 +12,20 @@
 #include "framework/numeric/parallel.hpp"
 
 namespace ndc {
+namespace {
+
+/// A model's registry entry: its own spec, and the model (it takes no parameters).
+template <class M>
+Registry<SubdivisionFactory>::Entry entryOf() {
+  return {M::spec(), [](const Parameters&) { return Subdivision(M{}); }};
+}
+
+}  // namespace
 
 //! [subdivision-registry]
 Registry<SubdivisionFactory>& subdivisionRegistry() {
   static Registry<SubdivisionFactory> registry(
-      "subdivision",
-      {{{"uniform",
-         "As in the paper: 2^n children per level, a box is bounded after every n halvings.",
-         {}},
-        [](const Parameters&) { return Subdivision(UniformSubdivision{}); }},
-       {{"binary", "One axis per level: every box is bounded after every halving.", {}},
-        [](const Parameters&) { return Subdivision(BinarySubdivision{}); }}});
+      "subdivision", {entryOf<UniformSubdivision>(), entryOf<BinarySubdivision>()});
   return registry;
 }
 //! [subdivision-registry]

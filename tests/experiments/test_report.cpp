@@ -19,6 +19,9 @@
 
 namespace fs = std::filesystem;
 using namespace ndc::report;
+using ndc::CsvTable;
+using ndc::parseCsv;
+using ndc::readCsv;
 
 namespace {
 

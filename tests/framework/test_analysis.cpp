@@ -10,7 +10,7 @@
 #include "framework/mesh/analysis.hpp"
 #include "framework/problem/problem.hpp"
 #include "framework/problem/system.hpp"
-#include "strategies/projection/newton.hpp"
+#include "strategies/projection/projection.hpp"
 #include "tests/test_support.hpp"
 
 namespace {

@@ -18,7 +18,7 @@
 #include "pipeline/pipeline.hpp"
 #include "pipeline/singular.hpp"
 #include "strategies/bounding/bounding.hpp"
-#include "strategies/projection/newton.hpp"
+#include "strategies/projection/projection.hpp"
 #include "strategies/subdivision/subdivision.hpp"
 #include "tests/test_support.hpp"
 

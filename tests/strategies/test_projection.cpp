@@ -15,7 +15,7 @@
 #include "framework/problem/problem.hpp"
 #include "framework/problem/system.hpp"
 #include "strategies/classification/classification.hpp"
-#include "strategies/projection/newton.hpp"
+#include "strategies/projection/projection.hpp"
 #include "tests/test_support.hpp"
 
 namespace {

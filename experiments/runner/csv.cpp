@@ -1,5 +1,5 @@
 // The one CSV reader of the experiments: see csv.hpp.
-#include "experiments/report/csv.hpp"
+#include "experiments/runner/csv.hpp"
 
 #include <algorithm>
 #include <cstdlib>
@@ -10,7 +10,7 @@
 
 #include "framework/util/errors.hpp"
 
-namespace ndc::report {
+namespace ndc {
 
 std::string readText(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -180,4 +180,4 @@ CsvTable readCsv(const std::filesystem::path& file) {
   return parseCsv(readText(file), file.string());
 }
 
-}  // namespace ndc::report
+}  // namespace ndc

@@ -1,7 +1,7 @@
 /// \file csv.hpp
-/// The one CSV reader of the experiments: the report reads the combined CSV of each experiment
-/// (`results/<id>/<id>.csv`) and a run's `cells.csv` with it, the viewer (experiments/view/)
-/// a run's `uncertified.csv`.
+/// The one CSV reader of the experiments, beside the runner that writes their CSV files: the
+/// report reads the combined CSV of each experiment (`results/<id>/<id>.csv`) and a run's
+/// `cells.csv` with it, the viewer (experiments/view/) a run's `uncertified.csv`.
 #pragma once
 
 #include <cstddef>
@@ -11,7 +11,7 @@
 #include <string_view>
 #include <vector>
 
-namespace ndc::report {
+namespace ndc {
 
 /// A CSV file held as text cells, addressed by column name. Malformed input and missing
 /// columns throw ndc::InputError with a one-line message that names the file.
@@ -53,4 +53,4 @@ CsvTable readCsv(const std::filesystem::path& file);
 /// The bytes of a file; throws InputError `FILE: cannot read the file` when it cannot be read.
 std::string readText(const std::filesystem::path& file);
 
-}  // namespace ndc::report
+}  // namespace ndc
