@@ -1,6 +1,8 @@
 /// \file adaptive_crossing.hpp
 /// The crossing connection's engine, AdaptiveCrossing, as a table of contents: its methods are
-/// grouped by the file of this folder that defines them (docs/crossing.md, "Source files").
+/// grouped by the file of this folder that defines them, a .inl per role, which only
+/// adaptive_crossing_double.cpp and adaptive_crossing_mpfr.cpp include, to instantiate the class
+/// once per scalar (docs/crossing.md, "Source files").
 /// Internal to the crossing connection (strategies/connection/crossing.hpp is its interface).
 ///
 /// Notation (docs/crossing.md, docs/certificate.md):
@@ -127,7 +129,7 @@ class AdaptiveCrossing {
   /// A leaf's facet mask (facetMask) when nothing is known: every facet may meet M_c.
   static constexpr std::uint64_t kAllFacets = ~std::uint64_t{0};
 
-  // ---- adaptive_crossing.cpp: the run
+  // ---- adaptive_crossing.inl: the run
   AdaptiveCrossing(const ConnectionInput<S>& in, int maxFaceDepth);
   /// The certified mesh, refining where the certificate fails. When refinement does not reach a
   /// certificate and its mesh has more non-manifold defects than the base grid's (crossings at
@@ -252,7 +254,7 @@ class AdaptiveCrossing {
     bool modelled = false;  ///< whether `model` is the leaf's
   };
 
-  // ---- adaptive_crossing.cpp: the run (continued)
+  // ---- adaptive_crossing.inl: the run (continued)
   /// Level offsets until no crossing is within rounding of a face boundary, each with its
   /// refinement and certificate; the complex of the last.
   ConnectionOutput<S> attempts();
@@ -264,7 +266,7 @@ class AdaptiveCrossing {
   /// boundary"), blocks merged where every leaf is certified.
   void buildComplex(ConnectionOutput<S>& out);
 
-  // ---- refinement.cpp: the refinement loop and its budget
+  // ---- refinement.inl: the refinement loop and its budget
   /// The refinement budget (docs/certificate.md "Adaptive refinement"). Solution leaves, those
   /// the bounding cannot exclude, carry the cost of certification: thin features need a few
   /// times the base cells (genus2 at depth 5: 8x, the thin torus at depth 3: 50x, so at least
@@ -290,7 +292,7 @@ class AdaptiveCrossing {
   /// level (or the leaf budget is spent). Returns the degenerate crossings of the last pass.
   std::int64_t refineAndCertify();
 
-  // ---- chord_refinement.cpp: --tolerance, the leaves whose mesh is beyond the chord error
+  // ---- chord_refinement.inl: --tolerance, the leaves whose mesh is beyond the chord error
   /// `--tolerance`: the leaves below the maximum level that are nodes of a mesh polygon inside
   /// the domain whose simplices have a barycentre farther than the tolerance from its Newton
   /// projection onto M (the analysis's chord error; the polygons at the domain's boundary, whose
@@ -302,7 +304,7 @@ class AdaptiveCrossing {
   /// diagonal as addSimplices does) has its barycentre farther than `tolerance` from M.
   bool chordAbove(const Polygon& poly, const std::vector<S>& vertex, const S& tolerance) const;
 
-  // ---- leaf_patches.cpp: a leaf's Bernstein patches
+  // ---- leaf_patches.inl: a leaf's Bernstein patches
   /// The root forms of the leaf at `index` of `level`, with their margins (cached).
   const RootForms& rootForms(std::span<const std::int32_t> index, int level);
   /// The root forms of every leaf in `leaves` (rootForms, which fills its cache: call it
@@ -322,7 +324,7 @@ class AdaptiveCrossing {
   /// The leaf's patches into t (once).
   void prepare(std::int32_t leaf, const RootForms& rf, LeafTests& t) const;
 
-  // ---- face_walk.cpp: the pass over the minimal m-faces, window by window, and what it records
+  // ---- face_walk.inl: the pass over the minimal m-faces, window by window, and what it records
   /// One pass over the minimal m-faces of the active leaves: the polygons of the crossed ones
   /// (excluded base cells around a crossed face become touch leaves, walked in turn) and the
   /// leaves next to a face whose crossings are not proven. Returns the degenerate crossings.
@@ -369,7 +371,7 @@ class AdaptiveCrossing {
   /// The per-leaf table follows the tree's growth (and the deferred touch leaves).
   void grow();
 
-  // ---- owned_faces.cpp: the minimal m-faces a leaf owns and the regions around them
+  // ---- owned_faces.inl: the minimal m-faces a leaf owns and the regions around them
   /// The faces leaf c owns, in the order crossFaces walks them, into `out`. Touch leaves, which
   /// crossFaces adds at excluded base cells, change neither which faces are minimal (a base-level
   /// leaf where there was none is never finer) nor who owns them (a touch leaf comes after every
@@ -388,7 +390,7 @@ class AdaptiveCrossing {
   /// upper (1) end.
   bool facetMet(std::uint64_t mask, int a, int side) const;
 
-  // ---- prefetch.cpp: a window's task per leaf: its emptiness, its facets and its faces solved
+  // ---- prefetch.inl: a window's task per leaf: its emptiness, its facets and its faces solved
   /// One task of startWindow: leaf c, whose perLeaf_.empty was `prior` and perLeaf_.facetsMet
   /// `priorFacets` when its window started, into its slot `out`.
   void prefetchLeaf(std::int32_t c, std::int8_t prior, std::uint64_t priorFacets,
@@ -445,7 +447,7 @@ class AdaptiveCrossing {
                             const Box<S>& box, const std::vector<int>& freeAxes,
                             const FaceEnds& ends) const;
 
-  // ---- leaf_certificate.cpp: each leaf's certificate (graphs, face graphs, link, boundary)
+  // ---- leaf_certificate.inl: each leaf's certificate (graphs, face graphs, link, boundary)
   /// The certificate of every active leaf (docs/certificate.md) into perLeaf_.failure.
   void certify();
   /// The certificate of active leaf c into perLeaf_.failure[c]. It writes only what belongs to c
@@ -503,7 +505,7 @@ class AdaptiveCrossing {
   /// whose face M is tangent to (tangentToFace) is marked stuck: refinement would not help.
   bool boundaryTransverse(std::int32_t c, const RootForms& rf, LeafTests& t, bool mark);
 
-  // ---- blocks.cpp: blocks of 2^n leaves certified together, and the mesh seen through them
+  // ---- blocks.inl: blocks of 2^n leaves certified together, and the mesh seen through them
   /// Tangency (docs/certificate.md, "Blocks"): where M touches a grid hyperplane, M_c crosses
   /// it in a small loop or in two crossings closer than any refinement separates, so neither
   /// leaf next to the touching point is simple; the block of 2^n leaves of one level around the
@@ -637,5 +639,10 @@ class AdaptiveCrossing {
   bool refining_ = true;              ///< false: certify the base grid only (run's fallback)
   bool budgetSpent_ = false;
 };
+
+// The one explicit instantiation definition of each (a program may hold only one) is in
+// adaptive_crossing_double.cpp and adaptive_crossing_mpfr.cpp.
+extern template class AdaptiveCrossing<double>;
+extern template class AdaptiveCrossing<Mpfr>;
 
 }  // namespace ndc::crossing_detail

@@ -1,5 +1,6 @@
-// A window's task per leaf: its emptiness, its facets and the faces it owns, solved
-// (adaptive_crossing.hpp).
+// A window's task per leaf. Included only by adaptive_crossing_{double,mpfr}.cpp.
+#pragma once
+
 #include "strategies/connection/crossing/adaptive_crossing.hpp"
 
 #include <cmath>
@@ -298,8 +299,5 @@ FaceResult<S> AdaptiveCrossing<S>::faceOutcome(FaceResult<S> r,
   }
   return r;
 }
-
-template class AdaptiveCrossing<double>;
-template class AdaptiveCrossing<Mpfr>;
 
 }  // namespace ndc::crossing_detail

@@ -1,5 +1,6 @@
-// The pass over the minimal m-faces of the crossing connection, window by window: the
-// polygons of the crossed faces, the touch leaves and the unproven faces (adaptive_crossing.hpp).
+// The pass over the minimal m-faces. Included only by adaptive_crossing_{double,mpfr}.cpp.
+#pragma once
+
 #include "strategies/connection/crossing/adaptive_crossing.hpp"
 
 #include <algorithm>
@@ -227,8 +228,5 @@ template <class S>
 void AdaptiveCrossing<S>::grow() {
   perLeaf_.grow(leafCount(), n_);
 }
-
-template class AdaptiveCrossing<double>;
-template class AdaptiveCrossing<Mpfr>;
 
 }  // namespace ndc::crossing_detail

@@ -1,5 +1,7 @@
-// The certificate of each leaf: graph tests, face graph tests, link and the domain's boundary
-// (docs/certificate.md; adaptive_crossing.hpp).
+// Each leaf's certificate. Included only by adaptive_crossing_{double,mpfr}.cpp.
+// See docs/certificate.md.
+#pragma once
+
 #include "strategies/connection/crossing/adaptive_crossing.hpp"
 
 #include <algorithm>
@@ -263,8 +265,5 @@ bool AdaptiveCrossing<S>::boundaryTransverse(std::int32_t c, const RootForms& rf
   }
   return true;
 }
-
-template class AdaptiveCrossing<double>;
-template class AdaptiveCrossing<Mpfr>;
 
 }  // namespace ndc::crossing_detail

@@ -1,5 +1,6 @@
-// The crossing connection's run: the attempts at general position, the fallback to the base
-// grid, the topology record and the dual complex (adaptive_crossing.hpp).
+// The run and CrossingConnection::connect. Included only by adaptive_crossing_{double,mpfr}.cpp.
+#pragma once
+
 #include "strategies/connection/crossing/adaptive_crossing.hpp"
 
 #include <algorithm>
@@ -194,9 +195,6 @@ void AdaptiveCrossing<S>::buildComplex(ConnectionOutput<S>& out) {
       out);
 }
 
-template class AdaptiveCrossing<double>;
-template class AdaptiveCrossing<Mpfr>;
-
 }  // namespace ndc::crossing_detail
 
 namespace ndc {
@@ -209,8 +207,5 @@ ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) co
   }
   return crossing_detail::AdaptiveCrossing<S>(in, maxFaceDepth).run();
 }
-
-template ConnectionOutput<double> CrossingConnection::connect(const ConnectionInput<double>&) const;
-template ConnectionOutput<Mpfr> CrossingConnection::connect(const ConnectionInput<Mpfr>&) const;
 
 }  // namespace ndc

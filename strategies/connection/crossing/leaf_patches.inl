@@ -1,5 +1,6 @@
-// A leaf's Bernstein patches: root forms with their rounding margins, restricted to the leaf
-// (adaptive_crossing.hpp).
+// A leaf's Bernstein patches. Included only by adaptive_crossing_{double,mpfr}.cpp.
+#pragma once
+
 #include "strategies/connection/crossing/adaptive_crossing.hpp"
 
 #include <algorithm>
@@ -74,8 +75,5 @@ void AdaptiveCrossing<S>::prepare(std::int32_t leaf, const RootForms& rf, LeafTe
   restrictLeaf(leaf, rf, t.patches, band);
   t.ready = true;
 }
-
-template class AdaptiveCrossing<double>;
-template class AdaptiveCrossing<Mpfr>;
 
 }  // namespace ndc::crossing_detail

@@ -1,5 +1,6 @@
-// `--tolerance`: the leaves whose mesh lies farther than the chord error from M
-// (adaptive_crossing.hpp).
+// --tolerance: leaves beyond the chord error. Included only by adaptive_crossing_{double,mpfr}.cpp.
+#pragma once
+
 #include "strategies/connection/crossing/adaptive_crossing.hpp"
 
 #include <array>
@@ -92,8 +93,5 @@ bool AdaptiveCrossing<S>::chordAbove(const Polygon& poly, const std::vector<S>& 
   }
   return false;
 }
-
-template class AdaptiveCrossing<double>;
-template class AdaptiveCrossing<Mpfr>;
 
 }  // namespace ndc::crossing_detail

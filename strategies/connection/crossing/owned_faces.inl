@@ -1,4 +1,6 @@
-// The minimal m-faces a leaf owns and the regions around them (adaptive_crossing.hpp).
+// The minimal m-faces a leaf owns. Included only by adaptive_crossing_{double,mpfr}.cpp.
+#pragma once
+
 #include "strategies/connection/crossing/adaptive_crossing.hpp"
 
 #include <algorithm>
@@ -109,8 +111,5 @@ template <class S>
 bool AdaptiveCrossing<S>::facetMet(std::uint64_t mask, int a, int side) const {
   return mask == kAllFacets || ((mask >> (2 * a + side)) & 1) != 0;
 }
-
-template class AdaptiveCrossing<double>;
-template class AdaptiveCrossing<Mpfr>;
 
 }  // namespace ndc::crossing_detail

@@ -1,4 +1,6 @@
-// The refinement loop of the crossing connection and its budget (adaptive_crossing.hpp).
+// The refinement loop and its budget. Included only by adaptive_crossing_{double,mpfr}.cpp.
+#pragma once
+
 #include "strategies/connection/crossing/adaptive_crossing.hpp"
 
 #include <algorithm>
@@ -78,8 +80,5 @@ std::int64_t AdaptiveCrossing<S>::refineAndCertify() {
     grow();
   }
 }
-
-template class AdaptiveCrossing<double>;
-template class AdaptiveCrossing<Mpfr>;
 
 }  // namespace ndc::crossing_detail

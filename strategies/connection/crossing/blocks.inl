@@ -1,5 +1,7 @@
-// Blocks of 2^n leaves certified together, and the mesh seen through them
-// (docs/certificate.md, "Blocks"; adaptive_crossing.hpp).
+// Blocks of 2^n leaves certified together. Included only by adaptive_crossing_{double,mpfr}.cpp.
+// See docs/certificate.md, "Blocks".
+#pragma once
+
 #include "strategies/connection/crossing/adaptive_crossing.hpp"
 
 #include <algorithm>
@@ -473,8 +475,5 @@ void AdaptiveCrossing<S>::collapseBlocks(bool certified) {
   }
   polygons_ = std::move(kept);
 }
-
-template class AdaptiveCrossing<double>;
-template class AdaptiveCrossing<Mpfr>;
 
 }  // namespace ndc::crossing_detail
