@@ -4,14 +4,11 @@
 
 #include <CLI/CLI.hpp>
 
-#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
-#include <filesystem>
 #include <limits>
 
-#include "framework/numeric/grid.hpp"
 #include "framework/problem/budget.hpp"
 #include "pipeline/pipeline.hpp"
 #include "strategies/bounding/bounding.hpp"
