@@ -335,6 +335,39 @@ void checkPrecision(const Problem& problem, std::size_t i, std::size_t b, const 
   }
 }
 
+/// checkEquations for an equation without a dense form (densityFree, beyond kMaxCoefficients):
+/// refuses it when its interval value on the domain is not finite, or when it vanishes at
+/// three points spread over the domain with its gradient (a nonzero polynomial of degree 2
+/// does not, but for an equation that is zero everywhere, `x0 - x0`).
+template <class S>
+void checkWithoutForm(const Problem& problem, std::size_t i, const Box<S>& domain) {
+  const Expression& e = problem.equations[i];
+  const std::size_t n = domain.lo.size();
+  std::vector<Interval<double>> box;
+  for (std::size_t j = 0; j < n; ++j)
+    box.emplace_back(toDouble(domain.lo[j]), toDouble(domain.hi[j]));
+  const Interval<double> range = e.evaluate<double>(std::span<const Interval<double>>(box));
+  if (!std::isfinite(range.lower()) || !std::isfinite(range.upper()))
+    throw InputError(problem.path + ": equation " + std::to_string(i + 1) +
+                     " overflows on the domain (its value is beyond the range of double): "
+                     "rescale the input");
+  bool zero = true;
+  std::vector<double> x(n), gradient(n);
+  for (int p = 1; p <= 3 && zero; ++p) {
+    // Points of a Weyl sequence: no two share a coordinate, none lies on a grid plane.
+    for (std::size_t j = 0; j < n; ++j) {
+      const double t = std::fmod(p * (0.6180339887498949 + 0.4142135623730951 * double(j)), 1.0);
+      x[j] = box[j].lower() + t * (box[j].upper() - box[j].lower());
+    }
+    zero = e.evaluate<double>(std::span<const double>(x), std::span<double>(gradient)) == 0 &&
+           std::all_of(gradient.begin(), gradient.end(), [](double g) { return g == 0; });
+  }
+  if (zero)
+    throw InputError(problem.path + ": equation " + std::to_string(i + 1) +
+                     " vanishes everywhere on the domain: its zero set is a region, not a "
+                     "hypersurface");
+}
+
 /// Refuses equations whose Bernstein form on the domain (or on a B-spline patch) is zero (the
 /// equation vanishes there: its zero set fills the region, `x - x`), not finite in double, or,
 /// in a double run, so large that subdividing it would overflow (1e308 * x^2 + ...) or so
@@ -347,6 +380,11 @@ std::vector<EquationRounding> checkEquations(const Problem& problem, const Box<S
   for (const Box<double>& patch : problem.roots) boxes.push_back(toScalar<S>(patch));
   std::vector<EquationRounding> rounding(problem.equations.size());
   for (std::size_t i = 0; i < problem.equations.size(); ++i) {
+    if (denseCoefficients(problem.equations[i]) > kMaxCoefficients) {
+      // No dense form to check (densityFree): by evaluation; no Bernstein path will use it.
+      checkWithoutForm(problem, i, domain);
+      continue;
+    }
     for (std::size_t b = 0; b < boxes.size(); ++b) {
       const Box<S>& box = boxes[b];
       Bernstein<S> form;

@@ -19,8 +19,9 @@ namespace ndc {
 /// with y = Q (x - c), Q a random orthogonal matrix and c a small random offset.
 inline constexpr std::array<std::string_view, 2> kGeneratorNames = {"rotated-circle",
                                                                     "rotated-sphere"};
-/// Largest ambient dimension a generator accepts (3^n Bernstein coefficients per equation).
-inline constexpr int kMaxGeneratedDimension = 12;
+/// Largest ambient dimension a generator accepts (the quadric has 3^n Bernstein coefficients,
+/// past R^12 over the reader's cap; it needs no dense form, ndc::densityFree).
+inline constexpr int kMaxGeneratedDimension = 16;
 
 /// A generated problem: its problem file text (docs/contracts.md 4.1) and the embedding it encodes.
 struct GeneratedProblem {

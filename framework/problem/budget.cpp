@@ -57,7 +57,10 @@ double workPerCell(const Problem& problem) {
       coefficients *= d + 1.0;
       span += d + 1.0;
     }
-    work += coefficients * span;
+    // Without a dense form (densityFree) the connection evaluates the quadratic form: O(n^2)
+    // per equation and box (8 n^2 matches the circles in R^10..R^16, docs/performance.md).
+    const double n = static_cast<double>(problem.n());
+    work += densityFree(e) ? std::min(coefficients * span, 8 * n * n) : coefficients * span;
   }
   return work;
 }

@@ -32,7 +32,8 @@ double baseRunBytes(int n);
 
 /// The time model (docs/input-limits.md, "Time"): the operations a run spends per solution
 /// cell, dominated by restricting each equation's Bernstein form to the cell (de Casteljau along
-/// each axis): the sum over equations of coefficients x (sum of degrees + n).
+/// each axis): the sum over equations of coefficients x (sum of degrees + n); for an equation
+/// that needs no dense form (densityFree), at most 8 n^2 (its quadratic form's evaluation).
 double workPerCell(const Problem& problem);
 
 /// Seconds per unit of workPerCell per solution cell for a whole run on this build (two

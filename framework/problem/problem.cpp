@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "framework/numeric/scalar.hpp"
+#include "framework/numeric/tape.hpp"
 #include "framework/problem/expectation.hpp"
 #include "framework/problem/toml_reader.hpp"
 
@@ -190,10 +191,12 @@ class Validator : public TomlReader {
       for (int d : e.degrees()) constant = constant && d == 0;
       if (constant) fail(node, what + " is constant (it uses no variable): '" + source + "'");
       // The Bernstein form has prod (d_j + 1) coefficients per box and level: refuse sizes that
-      // would exhaust memory instead of allocating without bound.
+      // would exhaust memory instead of allocating without bound. An equation of total degree
+      // at most 2 needs no dense form (densityFree): the default strategies enclose it by its
+      // quadratic form, in time polynomial in n.
       double coefficients = 1;
       for (int d : e.degrees()) coefficients *= d + 1.0;
-      if (coefficients > kMaxCoefficients) {
+      if (coefficients > kMaxCoefficients && !densityFree(e)) {
         std::ostringstream message;
         message << what << " needs " << coefficients << " Bernstein coefficients (the product of "
                 << "its degrees + 1); at most " << kMaxCoefficients << " are supported";
@@ -208,7 +211,7 @@ class Validator : public TomlReader {
       // Halving a box costs about (coefficients x degree) operations per equation along an axis
       // (de Casteljau), and a run halves thousands of boxes: bound the time as well as memory.
       const double work = coefficients * *std::max_element(degrees.begin(), degrees.end());
-      if (work > kMaxSubdivisionWork) {
+      if (work > kMaxSubdivisionWork && !densityFree(e)) {
         std::ostringstream message;
         message << what << " costs about " << work << " operations per subdivision step ("
                 << coefficients << " Bernstein coefficients times its largest degree); at most "
@@ -359,6 +362,16 @@ Expectation TomlReader::expectOf(const toml::node& node) const {
       expect.other[k] = i->get();
   }
   return expect;
+}
+
+bool densityFree(const Expression& equation) {
+  return equation.tape().totalDegree(3) <= 2 && equation.tape().leaves().empty();
+}
+
+double denseCoefficients(const Expression& equation) {
+  double coefficients = 1;
+  for (int d : equation.degrees()) coefficients *= d + 1.0;
+  return coefficients;
 }
 
 bool isProblemName(const std::string& s) {

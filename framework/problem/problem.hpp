@@ -54,8 +54,16 @@ struct Problem {
 };
 
 /// Largest number of Bernstein coefficients (product of degree + 1 over the variables) an
-/// equation may have; larger ones are rejected as bad input rather than exhausting memory.
+/// equation may have; larger ones are rejected as bad input rather than exhausting memory,
+/// unless the equation needs no dense form (densityFree).
 inline constexpr double kMaxCoefficients = 1e6;
+/// Whether the default strategies handle `equation` without its dense Bernstein form: total
+/// degree at most 2 and no patch leaf (the linearized bounding and the crossing connection
+/// enclose it by its quadratic form; docs/performance.md, "Without dense forms"). Such an
+/// equation may exceed kMaxCoefficients; the `bernstein` bounding refuses it then.
+bool densityFree(const Expression& equation);
+/// The product of (degree + 1) over the variables: the size of `equation`'s dense Bernstein form.
+double denseCoefficients(const Expression& equation);
 /// The largest degree of an equation in one variable: building the Bernstein form of a
 /// degree-d power costs about d^2 operations per coefficient, so past this a file could keep
 /// the tool busy for hours within the coefficient cap (x^10000, a product of 20,000 factors).

@@ -6,6 +6,7 @@
 #include <limits>
 #include <numeric>
 #include <span>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -31,7 +32,19 @@ BernsteinBounding<S>::BernsteinBounding(const Problem& problem, const Box<S>& do
   // Sec. 4: the constraints in Bernstein form on the domain, built once; every box's patches
   // are derived from these by halving.
   patches_.reserve(problem.equations.size());
-  for (const Expression& e : problem.equations) patches_.push_back(e.toBernstein<S>(domain));
+  for (std::size_t i = 0; i < problem.equations.size(); ++i) {
+    // The loader lets a quadratic equation exceed the dense forms' cap (densityFree).
+    const double coefficients = denseCoefficients(problem.equations[i]);
+    if (coefficients > kMaxCoefficients) {
+      std::ostringstream message;
+      message << "bounding 'bernstein' needs the dense Bernstein form of equation " << i + 1 << " ("
+              << coefficients << " coefficients; at most " << kMaxCoefficients
+              << " are supported): use the default bounding 'linearized', which encloses it "
+                 "by its quadratic form";
+      throw InputError(message.str());
+    }
+    patches_.push_back(problem.equations[i].toBernstein<S>(domain));
+  }
   // Test the smallest patches first: they are the cheapest to scan and, for a typical system
   // (a curved hypersurface cut by hyperplanes), the linear ones exclude most boxes.
   std::stable_sort(

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "applications/load.hpp"
+#include "experiments/runner/generate.hpp"
 #include "framework/io/io.hpp"
 #include "framework/problem/problem.hpp"
 #include "tests/test_process.hpp"
@@ -365,6 +366,22 @@ TEST_CASE("cli: an equation too large for memory is bad input, not a crash", "[c
   checkBadInput(ndcontour("solve " + big + " --depth 2"),
                 {"big.toml:4:", "equation 1", "Bernstein coefficients", "at most"});
   checkBadInput(ndcontour("info " + big), {"Bernstein coefficients"});
+}
+
+TEST_CASE("cli: a quadric past the dense forms' cap is solved; the bernstein bounding refuses it",
+          "[cli]") {
+  // The circle in R^13: its quadric has 3^13 Bernstein coefficients (docs/input-limits.md).
+  const std::string file =
+      quoted(writeProblem("r13.toml", ndc::generateProblem("rotated-circle", 13, 0).text).string());
+  const Run info = ndcontour("info " + file);
+  INFO(info.err);
+  CHECK(info.status == 0);
+  const Run solve = ndcontour("solve " + file + " --depth 4 --check --json");
+  INFO(solve.err);
+  CHECK(solve.status == 0);
+  CHECK(contains(solve.out, "\"certified\": true"));
+  checkBadInput(ndcontour("solve " + file + " --depth 4 --bounding bernstein"),
+                {"bounding 'bernstein'", "equation 1", "linearized"});
 }
 
 TEST_CASE("cli: solve compares the mesh with [expect]; --check exits 3 on a mismatch", "[cli]") {

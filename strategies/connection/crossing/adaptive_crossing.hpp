@@ -126,6 +126,16 @@ class AdaptiveCrossing {
   /// Reweighted least-squares steps of a face's multiplier test (faceMultipliersExclude), as in
   /// the linearized bounding.
   static constexpr int kFaceMultiplierSteps = 8;
+  /// The most Bernstein coefficients (all m equations' slices of one face) a face that
+  /// evaluation does not decide is solved on; beyond, the face stays unproven (solveFace), so
+  /// that no face costs (d + 1)^m per box for large m (docs/performance.md,
+  /// "Without dense forms").
+  static constexpr double kMaxFaceCoefficients = 32768;
+  /// The most Bernstein coefficients (all m equations' dense forms on a leaf) the certificate's
+  /// tests restrict to a leaf where evaluation does not decide: beyond (a quadric in R^12 has
+  /// 3^12 = 531441), such a test fails, and the leaf is refined or left uncertified, so that no
+  /// leaf costs (d + 1)^n. Only programs without patch leaves go without (byEvaluation_).
+  static constexpr double kMaxLeafCoefficients = 262144;
   /// A leaf's facet mask (facetMask) when nothing is known: every facet may meet M_c.
   static constexpr std::uint64_t kAllFacets = ~std::uint64_t{0};
 
@@ -428,6 +438,9 @@ class AdaptiveCrossing {
   /// leaves (proven, decided, clear of rounding and of the face's boundary).
   template <class Face>
   static bool quiet(const Face& r);
+  /// The Bernstein coefficients of the slices of the m equations on a face with fixed `axes`:
+  /// what one box of the face's Bernstein solve costs (FaceSolver::setBernsteinCost).
+  double faceCoefficients(const std::array<int, 2>& axes) const;
   /// Solves face (axes, side) of `leaf`; reads only, so faces are solved in parallel (a
   /// FaceSolver per thread, reset per call). For m >= 2 the face is first solved by evaluation of
   /// the programs (FaceSolver::solveByEvaluation); only a face that decides nothing so is solved on
@@ -611,7 +624,13 @@ class AdaptiveCrossing {
   GraphTest<S> graphTest_;
   CellTree tree_;
   std::vector<std::array<int, 2>> fixedAxes_;  ///< the k fixed axes of each kind of m-face
-  std::vector<S> level_;                       ///< c of the current attempt
+  std::vector<std::vector<int>> degrees_;      ///< each equation's degree in each variable
+  /// Whether the leaves' dense Bernstein forms are used where evaluation decides nothing
+  /// (kMaxLeafCoefficients); without them such a test fails (docs/performance.md, "Without
+  /// dense forms").
+  bool dense_ = true;
+  RootForms noForms_;         ///< rootForms' answer without dense forms: no forms, zero margins
+  std::vector<S> level_;      ///< c of the current attempt
   bool byEvaluation_ = true;  ///< faces and graph tests by evaluation first (no patch leaves)
   std::unordered_map<const std::vector<Bernstein<S>>*, RootForms> rootForms_;
   FaceStore<S> faces_;  ///< every solved face

@@ -64,6 +64,12 @@ AdaptiveCrossing<S>::AdaptiveCrossing(const ConnectionInput<S>& in, int maxFaceD
   byEvaluation_ = true;
   for (const Expression& e : in.system.equations())
     byEvaluation_ = byEvaluation_ && e.tape().leaves().empty();
+  // Without dense forms where they would be large (kMaxLeafCoefficients).
+  for (const Expression& e : in.system.equations()) degrees_.push_back(e.degrees());
+  double coefficients = 0;
+  for (const Expression& e : in.system.equations()) coefficients += denseCoefficients(e);
+  dense_ = !byEvaluation_ || coefficients <= kMaxLeafCoefficients;
+  noForms_.margins.assign(std::size_t(m_), S(0));
   setBudget(in.cells.size(), in.tolerance > 0, in.refineSeconds);
 }
 

@@ -197,6 +197,7 @@ template <class S>
 bool AdaptiveCrossing<S>::tryBlock(std::int32_t c, const std::vector<std::int32_t>& lo,
                                    const Incidence& incident, bool tentative, const RootForms& rf,
                                    BlockWork& w) {
+  if (!dense_) return false;  // the block's graph tests need its forms
   const int level = tree_.level(c);
   std::vector<std::int32_t> members;
   std::vector<CellKey> empties;

@@ -32,6 +32,18 @@ void FaceSolver<S>::reset(const System<S>& system, int maxDepth, std::span<const
 }
 
 template <class S>
+void FaceSolver<S>::setBernsteinCost(double coefficients) {
+  const double boxes = coefficients / 16;
+  if (!(boxes > double(kEvaluationBoxes))) {
+    evaluationBoxes_ = kEvaluationBoxes;
+    evaluationDepth_ = kEvaluationDepth;
+    return;
+  }
+  evaluationBoxes_ = static_cast<long>(std::min(boxes, double(kMaxEvaluationBoxes)));
+  evaluationDepth_ = kLargeEvaluationDepth;
+}
+
+template <class S>
 bool FaceSolver<S>::solve(std::span<const S> point, std::span<const int> freeAxes,
                           std::vector<Bernstein<S>>& patches, const FaceEnds& ends,
                           std::vector<std::vector<S>>& roots, std::span<const S> margins) {
@@ -173,7 +185,7 @@ bool FaceSolver<S>::evaluationRecurse(const Box<S>& owner, Box<S> search, const 
     if (round >= kContractions || !shrinks) break;
     search = std::move(contracted);
   }
-  if (depth >= kEvaluationDepth * m_ || ++boxes_ > kEvaluationBoxes) return false;
+  if (depth >= evaluationDepth_ * m_ || ++boxes_ > evaluationBoxes_) return false;
   // Halve along the free axis widest relative to the face (half-open children).
   int axis = 0;
   for (int j = 1; j < m_; ++j) {

@@ -68,6 +68,16 @@ class FaceSolver {
   bool solveByEvaluation(std::span<const S> point, std::span<const int> freeAxes,
                          const Box<S>& face, const FaceEnds& ends,
                          std::vector<std::vector<S>>& roots, FunctionRef<bool()> excludesFace);
+  /// Sets solveByEvaluation's budget from what one box of the Bernstein solve would cost:
+  /// `coefficients`, the Bernstein coefficients of the face slices of all m equations (each box
+  /// of the Bernstein solve bounds m derivatives of each, m (d + 1)^m operations per equation,
+  /// where a box by evaluation costs a run of the programs, polynomial in m). While the forms
+  /// are small (up to 16 kEvaluationBoxes coefficients) the budget is kEvaluationBoxes boxes of
+  /// depth kEvaluationDepth per axis; beyond, coefficients / 16 boxes (at most
+  /// kMaxEvaluationBoxes) of depth kLargeEvaluationDepth per axis, so that a face whose slices
+  /// have (d + 1)^m coefficients is decided by evaluation (docs/performance.md, "Without
+  /// dense forms"). Kept across reset().
+  void setBernsteinCost(double coefficients);
   /// Whether every decision of the last solve is a proof: exclusions by coefficient signs
   /// beyond the rounding margin or by interval evaluation, uniqueness and existence by the
   /// Krawczyk test in interval arithmetic, edge signs by interval values.
@@ -186,10 +196,15 @@ class FaceSolver {
   /// root needs about 2 maxDepth m boxes, a fold a few times that.
   long boxes_ = 0;
   static constexpr long kMaxBoxes = 4096;
-  /// solveByEvaluation's limits: beyond them the face goes to the Bernstein solve, which
-  /// handles what evaluation alone cannot decide (tangencies, roots within rounding).
+  /// solveByEvaluation's limits by default: beyond them the face goes to the Bernstein solve,
+  /// which handles what evaluation alone cannot decide (tangencies, roots within rounding).
   static constexpr int kEvaluationDepth = 3;
   static constexpr long kEvaluationBoxes = 64;
+  /// The limits where the Bernstein solve is dear (setBernsteinCost).
+  static constexpr int kLargeEvaluationDepth = 6;
+  static constexpr long kMaxEvaluationBoxes = 4096;
+  int evaluationDepth_ = kEvaluationDepth;
+  long evaluationBoxes_ = kEvaluationBoxes;
   /// Krawczyk contractions of one box before it is halved.
   static constexpr int kContractions = 8;
   std::vector<S> faceWidth_;  ///< solveByEvaluation's face widths, to pick the axis to halve

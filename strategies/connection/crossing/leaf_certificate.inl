@@ -67,7 +67,7 @@ bool AdaptiveCrossing<S>::cellGraph(std::int32_t leaf, const RootForms& rf, Leaf
     std::iota(all.begin(), all.end(), 0);
     perLeaf_.graph[leaf] = byEvaluation_ && leafJacobian(leaf, t) &&
                            t.test.graph(std::span<const Interval<S>>(t.whole), all);
-    if (!perLeaf_.graph[leaf]) {
+    if (!perLeaf_.graph[leaf] && dense_) {
       prepare(leaf, rf, t);
       perLeaf_.graph[leaf] = graphOf(t.patches, rf.margins, t.jacobian, t.test);
     }
@@ -172,6 +172,10 @@ bool AdaptiveCrossing<S>::facesGraph(std::int32_t leaf, const RootForms& rf, Lea
         face.lo[a] = face.hi[a] = side == 1 ? box.hi[a] : box.lo[a];
         bool excluded = false;
         if (byEvaluation_ && evaluatedGraph(face, a, excluded, t)) continue;
+        if (!dense_) {
+          failed = 2 * a + side;
+          continue;
+        }
         prepare(leaf, rf, t);
         if (!faceGraphOf(t.patches, rf.margins, a, side == 1, freeAxes(a), t.jacobian, t.test))
           failed = 2 * a + side;
@@ -245,10 +249,12 @@ bool AdaptiveCrossing<S>::boundaryTransverse(std::int32_t c, const RootForms& rf
   if (!touches) return true;
   for (const DomainStratum<S>& face : domainStrata(leafBox(c), sides, k_ + 1)) {
     if (levelsMiss(in_.system, face.box, std::span<const S>(level_), byEvaluation_)) continue;
-    prepare(c, rf, t);
-    if (slicesMiss(t.patches, std::span<const S>(rf.margins), leafBox(c), face,
-                   std::span<const S>(level_)))
-      continue;
+    if (dense_) {
+      prepare(c, rf, t);
+      if (slicesMiss(t.patches, std::span<const S>(rf.margins), leafBox(c), face,
+                     std::span<const S>(level_)))
+        continue;
+    }
     const auto fail = [&] {
       if (mark && tangentToFace(in_.system, face)) perLeaf_.stuck[c] = 1;
       return false;
@@ -261,7 +267,7 @@ bool AdaptiveCrossing<S>::boundaryTransverse(std::int32_t c, const RootForms& rf
     if (byEvaluation_ && evaluatedJacobian(face.box, t.jacobian, excluded) &&
         t.test.graph(t.jacobian, face.free))
       continue;
-    if (!hullGraph(t.patches, rf.margins, face.free, t.jacobian, t.test)) return fail();
+    if (!dense_ || !hullGraph(t.patches, rf.margins, face.free, t.jacobian, t.test)) return fail();
   }
   return true;
 }

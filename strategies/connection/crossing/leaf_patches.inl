@@ -13,6 +13,7 @@ namespace ndc::crossing_detail {
 template <class S>
 auto AdaptiveCrossing<S>::rootForms(std::span<const std::int32_t> index, int level)
     -> const RootForms& {
+  if (!dense_) return noForms_;
   const std::vector<Bernstein<S>>& forms = cellForms_.root(index, level);
   auto it = rootForms_.find(&forms);
   if (it != rootForms_.end()) return it->second;

@@ -66,6 +66,11 @@ template <class S>
 void AdaptiveCrossing<S>::restrictOnce(PrefetchedLeaf& leaf) const {
   if (leaf.restricted) return;
   leaf.restricted = true;
+  if (!dense_) {
+    // No forms: nothing proven empty (prefetchEmptiness decides before, for m >= 2).
+    if (leaf.out.empty < 0) leaf.out.empty = 0, leaf.out.band = 0;
+    return;
+  }
   bool band = false;
   const bool empty = restrictLeaf(leaf.c, leaf.rf, leaf.patches, band);
   if (leaf.out.empty < 0) leaf.out.empty = empty ? 1 : 0, leaf.out.band = band ? 1 : 0;
@@ -210,6 +215,19 @@ bool AdaptiveCrossing<S>::quiet(const Face& r) {
 }
 
 template <class S>
+double AdaptiveCrossing<S>::faceCoefficients(const std::array<int, 2>& axes) const {
+  double coefficients = 0;
+  for (const std::vector<int>& d : degrees_) {
+    double size = 1;
+    for (int j = 0; j < n_; ++j) {
+      if (j != axes[0] && (k_ == 1 || j != axes[1])) size *= double(d[j] + 1);
+    }
+    coefficients += size;
+  }
+  return coefficients;
+}
+
+template <class S>
 template <class Patches, class Preconditioner>
 FaceResult<S> AdaptiveCrossing<S>::solveFace(std::int32_t leaf, const std::array<int, 2>& axes,
                                              int side, Patches&& patches,
@@ -254,10 +272,19 @@ FaceResult<S> AdaptiveCrossing<S>::solveFace(std::int32_t leaf, const std::array
   };
   FaceSolver<S>& solver = w.solver;
   solver.reset(in_.system, maxFaceDepth_, std::span<const S>(level_), position_.slack);
+  solver.setBernsteinCost(faceCoefficients(axes));
   if (m_ > 1 && byEvaluation_ &&
       solver.solveByEvaluation(w.point, w.freeAxes, w.faceBox, w.ends, w.roots,
                                multipliersExclude)) {
     r.certain = r.proven = true;
+  } else if (m_ > 1 && byEvaluation_ &&
+             (!dense_ || faceCoefficients(axes) > kMaxFaceCoefficients)) {
+    // Slices of (d + 1)^m coefficients would cost more than the whole leaf is worth: the face
+    // stays unproven (its leaves fail their certificate and may be refined, where evaluation
+    // decides a smaller face), not stuck.
+    w.roots.clear();
+    r.certain = true;
+    r.proven = false;
   } else {
     w.roots.clear();
     faceSlices(patches(), axes, side, w.face, w.cut);
