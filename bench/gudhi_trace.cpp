@@ -7,7 +7,9 @@
 // (surfaces). Writes ASCII PLY (x y z u0.., as ndcontour does) and prints one JSON line.
 //
 // Usage: gudhi_trace PROBLEM [--scale S] [--out mesh.ply]
-//   PROBLEM: torus, clifford-torus-rotated, sphere-r5, flat-torus-r6, circle-r8, genus2
+//   PROBLEM: torus, clifford-torus-rotated, sphere-r5, flat-torus-r6, circle-r8, genus2, or
+//   section:FILE, the unit sphere cut by the hyperplanes M x + d = 0 of FILE (bench/scale.py's
+//   k-spheres): n, then one row "a_1 .. a_n d" per hyperplane, whitespace-separated
 //   S: the scale of the Coxeter triangulation (the length of its edges is about S)
 #include <gudhi/Coxeter_triangulation.h>
 #include <gudhi/Coxeter_triangulation/Cell_complex/Cell_complex.h>
@@ -140,6 +142,23 @@ bool makeProblem(const std::string& name, Problem& p) {
     VectorXd d(6);
     d << 0.1, -0.05, 0.15, -0.1, 0.05, -0.1;
     p = sphereSection(m, d);
+  } else if (name.rfind("section:", 0) == 0) {
+    // The file: n, then one row per hyperplane, M's row and d's entry (none for a sphere).
+    std::ifstream in(name.substr(8));
+    int n = 0;
+    if (!(in >> n) || n < 2) return false;
+    std::vector<double> values;
+    for (double v; in >> v;) values.push_back(v);
+    if (values.size() % static_cast<std::size_t>(n + 1) != 0) return false;
+    const auto rows = static_cast<Eigen::Index>(values.size() / static_cast<std::size_t>(n + 1));
+    MatrixXd m(rows, n);
+    VectorXd d(rows);
+    for (Eigen::Index i = 0; i < rows; ++i) {
+      for (Eigen::Index j = 0; j < n; ++j)
+        m(i, j) = values[static_cast<std::size_t>(i * (n + 1) + j)];
+      d(i) = values[static_cast<std::size_t>(i * (n + 1) + n)];
+    }
+    p = sphereSection(m, d);
   } else {
     return false;
   }
@@ -150,7 +169,7 @@ bool makeProblem(const std::string& name, Problem& p) {
   std::fprintf(stderr,
                "gudhi_trace: %s\nusage: gudhi_trace PROBLEM [--scale S] [--out mesh.ply]\n"
                "  PROBLEM: torus, clifford-torus-rotated, sphere-r5, flat-torus-r6, circle-r8, "
-               "genus2\n",
+               "genus2, section:FILE\n",
                message);
   std::exit(2);
 }

@@ -435,21 +435,22 @@ std::vector<double> coefficientErrors(const std::vector<EquationRounding>& round
 }
 
 /// The children of a cell that the run's bounding cannot exclude (adaptive refinement): the
-/// subdivision of the cell's box by one level.
+/// subdivision of the cell's box by one level, n entries (0 or 1, the half of each axis) per
+/// child (ConnectionInput::refine). The subdivision searches for them (binary subdivision:
+/// about n boxes per kept child), never through all 2^n.
 template <class S>
 std::vector<std::uint8_t> refineCell(const Problem& problem, const Settings& settings,
                                      const Subdivision& subdivision, const Box<double>& cell) {
   const int n = problem.n();
   const Bounding<S> bounding = createBounding<S>(settings.bounding, problem, toScalar<S>(cell));
   const SolutionCells children = subdivide<S>(bounding, subdivision, Grid{n, 1, cell});
-  std::vector<std::uint8_t> flags(std::size_t{1} << n, 0);
+  std::vector<std::uint8_t> halves;
+  halves.reserve(children.size() * std::size_t(n));
   for (std::size_t c = 0; c < children.size(); ++c) {
-    std::size_t bits = 0;
     const auto index = children.cell(c);
-    for (int j = 0; j < n; ++j) bits |= std::size_t(index[j] & 1) << j;
-    flags[bits] = 1;
+    for (int j = 0; j < n; ++j) halves.push_back(static_cast<std::uint8_t>(index[j] & 1));
   }
-  return flags;
+  return halves;
 }
 
 /// A certified run must give a manifold mesh; the welded mesh is checked once more, so that a

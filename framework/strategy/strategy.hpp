@@ -80,9 +80,10 @@ struct ConnectionInput {
   const std::vector<CellClass>& classes;
   Projector<S> project;  ///< Newton projection onto M (for centroids, dual vertices)
   int k = 1;             ///< manifold dimension
-  /// Adaptive refinement (docs/certificate.md): which of the 2^n children of a cell may hold
-  /// M (child c holds the upper half of axis j when bit j of c is set), from the run's
-  /// bounding. Empty: no refinement.
+  /// Adaptive refinement (docs/certificate.md): the children of a cell (its halves along every
+  /// axis) that may hold M, from the run's bounding: n entries per child, entry j 1 where the
+  /// child holds the upper half of axis j. Only these are listed, so that a refinement costs
+  /// the bounding's search for them, not 2^n. Empty function: no refinement.
   std::function<std::vector<std::uint8_t>(const Box<double>& cell)> refine;
   /// The deepest level refinement may reach (at least the grid's depth).
   int maxLevel = 0;

@@ -217,7 +217,7 @@ TEST_CASE("experiment: bad configs exit 2 with one line naming file, line and co
       {"generator-n",
        "id = \"generator-n\"\n" + head +
            "problems = [{ generator = \"rotated-sphere\", n = [2] }]\ndepths = [3]\n",
-       "4:50:", "n = 2 is out of range (accepted: 3..12)"},
+       "4:50:", "n = 2 is out of range (accepted: 3..16)"},
       {"quick-key", "id = \"quick-key\"\n" + head + circle + "depths = [3]\n[quick]\nid = \"x\"\n",
        "7:1:", "unknown key 'quick.id'"},
       {"quick-value",

@@ -51,6 +51,42 @@ namespace ndc::crossing_detail {
 /// Why a leaf is not certified (docs/certificate.md); the names go to uncertified.csv.
 enum class Failure : std::uint8_t { kNone, kCrossing, kGraph, kFaceGraph, kLink, kBoundary };
 
+/// A cell the bounding excluded (Occupant::Kind::kEmpty): a base cell the subdivision
+/// excluded, or a child of a refined leaf that refinement excluded; its level and its key there.
+struct EmptyCell {
+  int level = 0;
+  CellKey key = 0;
+  bool operator==(const EmptyCell&) const = default;
+};
+
+/// A map keyed by excluded cells: one hash map per level of the tree (keys of different levels
+/// may coincide).
+template <class V>
+class EmptyCellMap {
+ public:
+  /// Empty, for the levels base .. maxLevel.
+  void reset(int base, int maxLevel) {
+    base_ = base;
+    levels_.assign(std::size_t(maxLevel - base + 1), {});
+  }
+  void clear() {
+    for (CellMap<V>& level : levels_) level.clear();
+  }
+  V& operator[](const EmptyCell& e) { return levels_[std::size_t(e.level - base_)][e.key]; }
+  const V* find(const EmptyCell& e) const {
+    const CellMap<V>& level = levels_[std::size_t(e.level - base_)];
+    const auto it = level.find(e.key);
+    return it == level.end() ? nullptr : &it->second;
+  }
+
+ private:
+  int base_ = 0;
+  std::vector<CellMap<V>> levels_;
+};
+
+/// The excluded cell an occupant of kind kEmpty stands for.
+inline EmptyCell emptyCellOf(const Occupant& o) { return EmptyCell{o.level, o.key}; }
+
 /// Where a minimal m-face lies: its level, the index of its lower corner there and its k fixed
 /// axes.
 struct FaceRef {
@@ -136,6 +172,9 @@ class AdaptiveCrossing {
   /// 3^12 = 531441), such a test fails, and the leaf is refined or left uncertified, so that no
   /// leaf costs (d + 1)^n. Only programs without patch leaves go without (byEvaluation_).
   static constexpr double kMaxLeafCoefficients = 262144;
+  /// Blocks (2^n leaves certified together, each region looked up) are tried up to this n
+  /// only, so that no step costs 2^n past it (4,096 regions in R^12).
+  static constexpr int kMaxBlockDimension = 12;
   /// A leaf's facet mask (facetMask) when nothing is known: every facet may meet M_c.
   static constexpr std::uint64_t kAllFacets = ~std::uint64_t{0};
 
@@ -237,7 +276,7 @@ class AdaptiveCrossing {
     int level = 0;
     bool tentative = false;
     std::vector<std::int32_t> lo, members;
-    std::vector<CellKey> empties;
+    std::vector<EmptyCell> empties;
     std::vector<Failure> saved;  ///< the members' failures before
   };
 
@@ -363,7 +402,7 @@ class AdaptiveCrossing {
   /// A touch leaf at the excluded base cell `key`: its number now, its place in the tree once
   /// the window solved beside the walk is done (addDeferredLeaves), so that the tasks never
   /// see the tree change.
-  std::int32_t deferTouchLeaf(CellKey key);
+  std::int32_t deferTouchLeaf(const EmptyCell& cell);
   /// Adds the deferred touch leaves to the tree, in order: they get the numbers they were given.
   void addDeferredLeaves();
   /// The leaves of the tree and the deferred touch leaves.
@@ -568,10 +607,13 @@ class AdaptiveCrossing {
   /// that certifies takes its members (perLeaf_.block and perLeaf_.failure) and goes to w.made.
   bool tryBlock(std::int32_t c, const std::vector<std::int32_t>& lo, const Incidence& incident,
                 bool tentative, const RootForms& rf, BlockWork& w);
+  /// The graph tests of a block's box (the box's, and for k = 2 each facet's) on J enclosed
+  /// over the whole box by evaluation: true when that proves them all (no Bernstein form).
+  bool evaluatedBlockGraphs(const Box<S>& box, BlockWork& w) const;
   /// The leaves of a block: every region of it an active leaf of `level` in no other block,
   /// inside one polynomial piece of the input.
   bool blockMembers(int level, const std::vector<std::int32_t>& lo,
-                    std::vector<std::int32_t>& members, std::vector<CellKey>& empties) const;
+                    std::vector<std::int32_t>& members, std::vector<EmptyCell>& empties) const;
   /// The polygons of the block's boundary with its leaves as one node (members.front());
   /// those inside it drop out. False when a polygon meets the block twice (not a box).
   bool blockLink(const std::vector<std::int32_t>& members, const Incidence& incident,
@@ -636,20 +678,20 @@ class AdaptiveCrossing {
   FaceStore<S> faces_;  ///< every solved face
   std::vector<Polygon> polygons_;
   std::vector<S> rootPoints_;
-  LeafTable<S> perLeaf_;                        ///< what is known of each leaf
-  FlatMap<CellKey, std::int32_t> touchLeaves_;  ///< the touch leaves of one crossFaces, by base key
-  std::array<Window, 2> windows_;  ///< crossFaces's: the one walked, the one solved beside
-  std::vector<CellKey> deferred_;  ///< deferTouchLeaf's, until addDeferredLeaves
+  LeafTable<S> perLeaf_;                    ///< what is known of each leaf
+  EmptyCellMap<std::int32_t> touchLeaves_;  ///< the touch leaves of one crossFaces, by their cell
+  std::array<Window, 2> windows_;           ///< crossFaces's: the one walked, the one solved beside
+  std::vector<EmptyCell> deferred_;         ///< deferTouchLeaf's, until addDeferredLeaves
   /// Leaves per window of crossFaces: enough tasks for many threads, a few MB of slots.
   static constexpr std::int32_t kWindowLeaves = 2048;
-  std::vector<FaceRef> unprovenFaces_;                  ///< recordUnproven
-  CellMap<std::vector<std::int32_t>> unprovenOfEmpty_;  ///< per empty cell
-  std::vector<std::vector<std::int32_t>> blocks_;       ///< the leaves of certified blocks
+  std::vector<FaceRef> unprovenFaces_;                       ///< recordUnproven
+  EmptyCellMap<std::vector<std::int32_t>> unprovenOfEmpty_;  ///< per excluded cell
+  std::vector<std::vector<std::int32_t>> blocks_;            ///< the leaves of certified blocks
   /// Per block: its lower corner and level, and its leaves' failures before it (to dissolve
   /// it); a dissolved block has no leaves.
   std::vector<std::vector<std::int32_t>> blockLo_;
   std::vector<int> blockLevel_;
-  std::vector<std::vector<CellKey>> blockEmpties_;  ///< its base cells the bounding excluded
+  std::vector<std::vector<EmptyCell>> blockEmpties_;  ///< its cells the bounding excluded
   std::vector<std::vector<Failure>> blockSaved_;
   std::int64_t refined_ = 0;
   static constexpr std::size_t kMaxLeaves = std::size_t{1} << 22;

@@ -70,6 +70,8 @@ AdaptiveCrossing<S>::AdaptiveCrossing(const ConnectionInput<S>& in, int maxFaceD
   for (const Expression& e : in.system.equations()) coefficients += denseCoefficients(e);
   dense_ = !byEvaluation_ || coefficients <= kMaxLeafCoefficients;
   noForms_.margins.assign(std::size_t(m_), S(0));
+  touchLeaves_.reset(grid_.depth, tree_.maxLevel());
+  unprovenOfEmpty_.reset(grid_.depth, tree_.maxLevel());
   setBudget(in.cells.size(), in.tolerance > 0, in.refineSeconds);
 }
 

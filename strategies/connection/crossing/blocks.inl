@@ -20,6 +20,8 @@ void AdaptiveCrossing<S>::mergeBlocks(const Incidence& incident,
   blockEmpties_.clear();
   // certify grew the per-leaf table to every leaf of the tree.
   std::fill(perLeaf_.block.begin(), perLeaf_.block.end(), -1);
+  // A block has 2^n regions, each looked up: none past kMaxBlockDimension.
+  if (n_ > kMaxBlockDimension) return;
   // The leaves that try blocks, with their root forms: not a leaf whose own graph test fails
   // (the graph test on a block around it would fail too, on a wider box with wider Jacobian
   // enclosures; only refinement can help), nor one M may touch the domain's boundary in
@@ -200,7 +202,7 @@ bool AdaptiveCrossing<S>::tryBlock(std::int32_t c, const std::vector<std::int32_
   if (!dense_) return false;  // the block's graph tests need its forms
   const int level = tree_.level(c);
   std::vector<std::int32_t> members;
-  std::vector<CellKey> empties;
+  std::vector<EmptyCell> empties;
   if (!blockMembers(level, lo, members, empties)) return false;
   // Every unproven face next to the block's regions lies inside it (tentative: or inside
   // one face of its box, for verifyBlocks to check the leaves across).
@@ -213,9 +215,9 @@ bool AdaptiveCrossing<S>::tryBlock(std::int32_t c, const std::vector<std::int32_
   for (std::int32_t c : members) {
     if (!within(perLeaf_.unprovenOf[c], tentative)) return false;
   }
-  for (CellKey key : empties) {
-    auto it = unprovenOfEmpty_.find(key);
-    if (it != unprovenOfEmpty_.end() && !within(it->second, tentative)) return false;
+  for (const EmptyCell& e : empties) {
+    const std::vector<std::int32_t>* faces = unprovenOfEmpty_.find(e);
+    if (faces && !within(*faces, tentative)) return false;
   }
   // The link: now, or (tentative) once the neighbour blocks exist, in verifyBlocks.
   std::vector<Polygon> link;
@@ -228,11 +230,17 @@ bool AdaptiveCrossing<S>::tryBlock(std::int32_t c, const std::vector<std::int32_
   for (std::int32_t& i : hi) ++i;
   Box<S> box = cellBox(tree_.grid(level), domain_, lo);
   box.hi = cellBox(tree_.grid(level), domain_, hi).hi;
-  w.patches.resize(m_);
-  for (int i = 0; i < m_; ++i) (*rf.forms)[i].restrictInto(box, w.patches[i]);
-  if (!graphOf(w.patches, rf.margins, w.jacobian, w.test) && !intervalEmpty(box, true))
-    return false;
-  if (k_ == 2) {
+  if (!evaluatedBlockGraphs(box, w)) {
+    // The Bernstein hulls where evaluation does not prove them.
+    if (!dense_) return false;
+    w.patches.resize(m_);
+    for (int i = 0; i < m_; ++i) (*rf.forms)[i].restrictInto(box, w.patches[i]);
+    if (!graphOf(w.patches, rf.margins, w.jacobian, w.test) && !intervalEmpty(box, true))
+      return false;
+  } else {
+    w.patches.clear();  // the faces' tests below are proven by J over the box
+  }
+  if (k_ == 2 && !w.patches.empty()) {
     // A face of the block's box that fails as a whole: a tentative block may prove it leaf
     // face by leaf face (subFacesGraph).
     const auto failing = failingFacesOf(w.patches, rf.margins, tentative, w.jacobian, w.test);
@@ -258,9 +266,26 @@ bool AdaptiveCrossing<S>::tryBlock(std::int32_t c, const std::vector<std::int32_
 }
 
 template <class S>
+bool AdaptiveCrossing<S>::evaluatedBlockGraphs(const Box<S>& box, BlockWork& w) const {
+  if (!byEvaluation_) return false;
+  bool excluded = false;
+  if (!evaluatedJacobian(box, w.jacobian, excluded)) return false;
+  if (excluded) return true;  // M_c misses the box: nothing to test
+  const std::span<const Interval<S>> whole(w.jacobian);
+  std::vector<int> all(n_);
+  std::iota(all.begin(), all.end(), 0);
+  if (!w.test.graph(whole, all)) return false;
+  // J over the box holds J over each of its facets: the facets' graph tests (k = 2) too.
+  for (int a = 0; k_ == 2 && a < n_; ++a) {
+    if (!w.test.graph(whole, freeAxes(a))) return false;
+  }
+  return true;
+}
+
+template <class S>
 bool AdaptiveCrossing<S>::blockMembers(int level, const std::vector<std::int32_t>& lo,
                                        std::vector<std::int32_t>& members,
-                                       std::vector<CellKey>& empties) const {
+                                       std::vector<EmptyCell>& empties) const {
   const std::int64_t top = tree_.grid(level).cellsPerAxis();
   const int patchLevel = in_.problem.roots.empty() ? 0 : in_.problem.rootLevel;
   for (int j = 0; j < n_; ++j) {
@@ -271,10 +296,10 @@ bool AdaptiveCrossing<S>::blockMembers(int level, const std::vector<std::int32_t
   for (std::uint32_t corner = 0; corner < (1u << n_); ++corner) {
     for (int j = 0; j < n_; ++j) position[j] = lo[j] + static_cast<std::int32_t>((corner >> j) & 1);
     const Occupant o = tree_.find(level, position);
-    // A base cell the bounding excluded: M_c does not enter it (it would be a touch leaf).
+    // A cell the bounding excluded: M_c does not enter it (it would be a touch leaf).
     if (o.kind == Occ::kEmpty) {
-      if (std::find(empties.begin(), empties.end(), o.key) == empties.end())
-        empties.push_back(o.key);
+      if (std::find(empties.begin(), empties.end(), emptyCellOf(o)) == empties.end())
+        empties.push_back(emptyCellOf(o));
       continue;
     }
     if (o.kind != Occ::kLeaf || tree_.level(o.leaf) != level || !tree_.active(o.leaf) ||
@@ -387,9 +412,9 @@ bool AdaptiveCrossing<S>::blockStands(std::size_t b, const Incidence& incident) 
   for (std::int32_t c : blocks_[b]) {
     if (!stands(perLeaf_.unprovenOf[c])) return false;
   }
-  for (CellKey key : blockEmpties_[b]) {
-    auto it = unprovenOfEmpty_.find(key);
-    if (it != unprovenOfEmpty_.end() && !stands(it->second)) return false;
+  for (const EmptyCell& e : blockEmpties_[b]) {
+    const std::vector<std::int32_t>* faces = unprovenOfEmpty_.find(e);
+    if (faces && !stands(*faces)) return false;
   }
   std::vector<Polygon> link;
   std::vector<std::int32_t> ps;

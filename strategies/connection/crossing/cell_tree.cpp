@@ -43,7 +43,7 @@ std::int32_t CellTree::addLeaf(int level, std::span<const std::int32_t> index, b
   return leaf;
 }
 
-std::int32_t CellTree::refine(std::int32_t leaf, const std::vector<std::uint8_t>& solution) {
+std::int32_t CellTree::refine(std::int32_t leaf, const std::vector<std::uint8_t>& halves) {
   const int level = level_[leaf];
   if (level >= maxLevel_) throw std::logic_error("CellTree::refine: at the maximum level");
   const CellKey key = grid(level).pack(index(leaf));
@@ -54,9 +54,12 @@ std::int32_t CellTree::refine(std::int32_t leaf, const std::vector<std::uint8_t>
   const std::vector<std::int32_t> parent(index(leaf).begin(), index(leaf).end());
   std::vector<std::int32_t> child(n_);
   const auto first = static_cast<std::int32_t>(level_.size());
-  for (std::size_t c = 0; c < solution.size(); ++c) {
-    for (int j = 0; j < n_; ++j) child[j] = 2 * parent[j] + static_cast<std::int32_t>((c >> j) & 1);
-    addLeaf(level + 1, child, solution[c] != 0);
+  if (halves.size() % std::size_t(n_) != 0)
+    throw std::logic_error("CellTree::refine: not n entries per child");
+  for (std::size_t c = 0; c < halves.size(); c += std::size_t(n_)) {
+    for (int j = 0; j < n_; ++j)
+      child[j] = 2 * parent[j] + static_cast<std::int32_t>(halves[c + j]);
+    addLeaf(level + 1, child, true);
   }
   return first;
 }
@@ -92,7 +95,8 @@ Occupant CellTree::find(int level, std::span<const std::int32_t> index) const {
     }
   }
   // From the base level down: the first leaf met holds the region; a level where the cell is
-  // neither a leaf nor internal is a region the subdivision excluded.
+  // neither a leaf nor internal is a region the bounding excluded (a base cell, or a child of a
+  // refined cell).
   thread_local std::vector<std::int32_t> at;
   at.assign(index.begin(), index.end());
   for (int l = base_; l <= level; ++l) {
@@ -105,8 +109,8 @@ Occupant CellTree::find(int level, std::span<const std::int32_t> index) const {
     }
     if (!internal_[l - base_].contains(key)) {
       out.kind = Occupant::Kind::kEmpty;
+      out.level = l;
       out.key = key;
-      if (l != base_) throw std::logic_error("CellTree::find: a refined cell lost a child");
       return out;
     }
   }

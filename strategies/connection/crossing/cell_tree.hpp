@@ -13,20 +13,23 @@
 namespace ndc {
 
 /// What occupies the region next to a face: a leaf of the tree, finer leaves (the face is not
-/// minimal), the outside of the domain, or a base cell the subdivision excluded (no leaf).
+/// minimal), the outside of the domain, or a cell the bounding excluded (no leaf): a base cell
+/// the subdivision excluded, or a child of a refined leaf that refinement excluded.
 struct Occupant {
   enum class Kind { kLeaf, kFiner, kOutside, kEmpty };
   Kind kind = Kind::kEmpty;
-  std::int32_t leaf = -1;  ///< kLeaf: the leaf
+  std::int32_t leaf = -1;   ///< kLeaf: the leaf
+  std::int32_t level = -1;  ///< kEmpty: the excluded cell's level
   /// kOutside: which axes the region lies beyond (2 bits per axis: 1 below, 2 above);
-  /// kEmpty: the packed index of the excluded base cell.
+  /// kEmpty: the packed index of the excluded cell at its level.
   CellKey key = 0;
 };
 
 /// A 2^n-tree over the grid of `base` depth, refined down to at most `maxLevel`. Leaves are never
-/// removed: a refined leaf becomes inactive, an internal node, and its 2^n children become
-/// leaves (those the bounding excludes too, flagged as not solution cells), so every region
-/// below a refined cell is a leaf and lookups need no search. Leaf numbers are stable.
+/// removed: a refined leaf becomes inactive, an internal node, and those of its 2^n children
+/// the bounding keeps become leaves; the others stay regions without a leaf, as the base cells
+/// the subdivision excluded (find: kEmpty, with their level), so that a refinement costs its
+/// kept children, not 2^n. Leaf numbers are stable.
 class CellTree {
  public:
   CellTree(const Grid& base, int maxLevel);
@@ -43,9 +46,10 @@ class CellTree {
   void addBaseCells(const SolutionCells& cells);
   /// Adds a leaf (its key must be new at its level); returns its number.
   std::int32_t addLeaf(int level, std::span<const std::int32_t> index, bool solution);
-  /// Refines an active leaf: it becomes internal; `solution[c]` says whether child c (bit j:
-  /// upper half of axis j) may hold M. Returns the first child's number (children follow).
-  std::int32_t refine(std::int32_t leaf, const std::vector<std::uint8_t>& solution);
+  /// Refines an active leaf: it becomes internal, and the children the bounding keeps become
+  /// solution leaves: `halves` holds n entries per kept child (entry j: 1 for the upper half of
+  /// axis j; ConnectionInput::refine). Returns the first child's number (the others follow).
+  std::int32_t refine(std::int32_t leaf, const std::vector<std::uint8_t>& halves);
 
   /// The region at `index` of level `level` (the index may lie outside the grid).
   Occupant find(int level, std::span<const std::int32_t> index) const;

@@ -135,7 +135,7 @@ std::int64_t AdaptiveCrossing<S>::addFace(const FaceResult<S>& r, std::array<Occ
     if (around[q].kind == Occ::kEmpty) {
       // A cell the level set F = c enters where M only touches it: a touch leaf.
       around[q].kind = Occ::kLeaf;
-      around[q].leaf = deferTouchLeaf(around[q].key);
+      around[q].leaf = deferTouchLeaf(emptyCellOf(around[q]));
       if (unproven) perLeaf_.unproven[around[q].leaf] = 1;
       if (singular) perLeaf_.singular[around[q].leaf] = 1;
     }
@@ -157,10 +157,10 @@ std::int64_t AdaptiveCrossing<S>::addFace(const FaceResult<S>& r, std::array<Occ
 }
 
 template <class S>
-std::int32_t AdaptiveCrossing<S>::deferTouchLeaf(CellKey key) {
+std::int32_t AdaptiveCrossing<S>::deferTouchLeaf(const EmptyCell& cell) {
   const auto leaf = static_cast<std::int32_t>(leafCount());
-  deferred_.push_back(key);
-  touchLeaves_.insert(key, leaf);
+  deferred_.push_back(cell);
+  touchLeaves_[cell] = leaf;
   grow();
   return leaf;
 }
@@ -168,9 +168,9 @@ std::int32_t AdaptiveCrossing<S>::deferTouchLeaf(CellKey key) {
 template <class S>
 void AdaptiveCrossing<S>::addDeferredLeaves() {
   std::vector<std::int32_t> index(n_);
-  for (const CellKey key : deferred_) {
-    grid_.unpack(key, index);
-    tree_.addLeaf(grid_.depth, index, false);
+  for (const EmptyCell& cell : deferred_) {
+    tree_.grid(cell.level).unpack(cell.key, index);
+    tree_.addLeaf(cell.level, index, false);
   }
   deferred_.clear();
 }
@@ -201,7 +201,7 @@ void AdaptiveCrossing<S>::recordUnproven(const std::array<Occupant, 4>& around,
       grow();
       perLeaf_.unprovenOf[around[q].leaf].push_back(f);
     } else if (around[q].kind == Occ::kEmpty) {
-      unprovenOfEmpty_[around[q].key].push_back(f);
+      unprovenOfEmpty_[emptyCellOf(around[q])].push_back(f);
     }
   }
   unprovenFaces_.push_back(face);

@@ -89,7 +89,7 @@ void AdaptiveCrossing<S>::faceAround(const std::vector<std::int32_t>& ci, const 
   around = f.around;
   for (int q = 0; q < (1 << k_); ++q) {
     if (around[q].kind != Occ::kEmpty) continue;
-    if (const std::int32_t* leaf = touchLeaves_.find(around[q].key))
+    if (const std::int32_t* leaf = touchLeaves_.find(emptyCellOf(around[q])))
       around[q] = Occupant{Occ::kLeaf, *leaf, 0};
   }
 }

@@ -18,19 +18,17 @@ void AdaptiveCrossing<S>::setBudget(std::size_t baseCells, bool tolerance, doubl
   const double byWork = refineSeconds / (workPerCell(in_.problem) * kSecondsPerWork);
   if (byWork < static_cast<double>(maxSolutionLeaves_))
     maxSolutionLeaves_ = static_cast<std::size_t>(std::max(byWork, 1.0));
-  const std::size_t perSolutionChild = std::size_t{1} << std::max(1, n_ - k_);
-  maxLeaves_ = maxSolutionLeaves_ >= kMaxLeaves / perSolutionChild
-                   ? kMaxLeaves
-                   : perSolutionChild * maxSolutionLeaves_;
+  // Every leaf is a solution leaf or a touch leaf (refinement makes no leaf of an excluded
+  // child): the second part only bounds memory.
+  maxLeaves_ = kMaxLeaves;
 }
 
 template <class S>
 bool AdaptiveCrossing<S>::withinBudget(std::size_t refine) const {
-  const std::size_t children = refine << n_;
   const double perLeaf =
       refined_ > 0 ? double(solutionChildren_) / double(refined_) : double(1 << k_);
   const auto predicted = static_cast<std::size_t>(double(refine) * perLeaf);
-  return tree_.size() + children <= maxLeaves_ &&
+  return tree_.size() + predicted <= maxLeaves_ &&
          tree_.solutionLeaves() + predicted <= maxSolutionLeaves_;
 }
 
@@ -72,8 +70,7 @@ std::int64_t AdaptiveCrossing<S>::refineAndCertify() {
       children[i] = in_.refine(cellBox(tree_.grid(tree_.level(c)), grid_.domain, tree_.index(c)));
     });
     for (std::size_t i = 0; i < refine.size(); ++i) {
-      solutionChildren_ += static_cast<std::size_t>(std::count_if(
-          children[i].begin(), children[i].end(), [](std::uint8_t f) { return f != 0; }));
+      solutionChildren_ += children[i].size() / std::size_t(n_);
       tree_.refine(refine[i], children[i]);
       ++refined_;
     }
