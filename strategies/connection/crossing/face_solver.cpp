@@ -32,8 +32,9 @@ void FaceSolver<S>::reset(const System<S>& system, int maxDepth, std::span<const
 }
 
 template <class S>
-void FaceSolver<S>::setBernsteinCost(double coefficients) {
-  const double boxes = coefficients / 16;
+void FaceSolver<S>::setBernsteinCost(double coefficients, bool fallback) {
+  const double boxes =
+      std::min(coefficients / 16, fallback ? 1e300 : double(kUnaidedEvaluationBoxes));
   if (!(boxes > double(kEvaluationBoxes))) {
     evaluationBoxes_ = kEvaluationBoxes;
     evaluationDepth_ = kEvaluationDepth;

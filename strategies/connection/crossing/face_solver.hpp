@@ -76,8 +76,10 @@ class FaceSolver {
   /// depth kEvaluationDepth per axis; beyond, coefficients / 16 boxes (at most
   /// kMaxEvaluationBoxes) of depth kLargeEvaluationDepth per axis, so that a face whose slices
   /// have (d + 1)^m coefficients is decided by evaluation (docs/performance.md, "Without
-  /// dense forms"). Kept across reset().
-  void setBernsteinCost(double coefficients);
+  /// dense forms"). Without `fallback` (the caller will not solve the face on its slices; it
+  /// stays unproven, and its leaves may be refined) at most kUnaidedEvaluationBoxes: a smaller
+  /// face is cheaper to decide than a large one that evaluation cannot. Kept across reset().
+  void setBernsteinCost(double coefficients, bool fallback);
   /// Whether every decision of the last solve is a proof: exclusions by coefficient signs
   /// beyond the rounding margin or by interval evaluation, uniqueness and existence by the
   /// Krawczyk test in interval arithmetic, edge signs by interval values.
@@ -203,6 +205,7 @@ class FaceSolver {
   /// The limits where the Bernstein solve is dear (setBernsteinCost).
   static constexpr int kLargeEvaluationDepth = 6;
   static constexpr long kMaxEvaluationBoxes = 4096;
+  static constexpr long kUnaidedEvaluationBoxes = 256;
   int evaluationDepth_ = kEvaluationDepth;
   long evaluationBoxes_ = kEvaluationBoxes;
   /// Krawczyk contractions of one box before it is halved.

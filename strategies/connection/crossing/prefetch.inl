@@ -272,13 +272,15 @@ FaceResult<S> AdaptiveCrossing<S>::solveFace(std::int32_t leaf, const std::array
   };
   FaceSolver<S>& solver = w.solver;
   solver.reset(in_.system, maxFaceDepth_, std::span<const S>(level_), position_.slack);
-  solver.setBernsteinCost(faceCoefficients(axes));
+  // Solved on its Bernstein slices where evaluation does not decide it, unless they are large.
+  const double coefficients = faceCoefficients(axes);
+  const bool slices = dense_ && coefficients <= kMaxFaceCoefficients;
+  solver.setBernsteinCost(coefficients, slices);
   if (m_ > 1 && byEvaluation_ &&
       solver.solveByEvaluation(w.point, w.freeAxes, w.faceBox, w.ends, w.roots,
                                multipliersExclude)) {
     r.certain = r.proven = true;
-  } else if (m_ > 1 && byEvaluation_ &&
-             (!dense_ || faceCoefficients(axes) > kMaxFaceCoefficients)) {
+  } else if (m_ > 1 && byEvaluation_ && !slices) {
     // Slices of (d + 1)^m coefficients would cost more than the whole leaf is worth: the face
     // stays unproven (its leaves fail their certificate and may be refined, where evaluation
     // decides a smaller face), not stuck.
