@@ -35,7 +35,7 @@ ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import measure  # noqa: E402
-from tables import sh, spread, timed, write_section  # noqa: E402
+from tables import find_bindir, nearest, sh, spread, timed, write_section  # noqa: E402
 
 BEGIN, END = "<!-- peer-bench:begin -->", "<!-- peer-bench:end -->"
 
@@ -128,18 +128,7 @@ def topology_text(run):
 def match(nd_runs, peer_runs, limit=4.0):
     """Each ndcontour run with the peer run of the nearest error (log scale), if within a factor
     limit."""
-    pairs = []
-    for a in nd_runs:
-        best = None
-        for i, b in enumerate(peer_runs):
-            if not (0 < b["error"] < math.inf) or not (0 < a["error"] < math.inf):
-                continue
-            gap = abs(math.log(b["error"] / a["error"]))
-            if best is None or gap < best[0]:
-                best = (gap, i)
-        if best is not None and best[0] < math.log(limit):
-            pairs.append((a, peer_runs[best[1]]))
-    return pairs
+    return [(a, b) for a in nd_runs if (b := nearest(a, peer_runs, limit)) is not None]
 
 
 def fmt_time(times):
@@ -155,18 +144,8 @@ def main(argv):
     ap.add_argument("--workdir", default=None)
     ap.add_argument("--only", default=None, help="comma-separated problems")
     args = ap.parse_args(argv)
-    bindir = args.bindir
-    if bindir is None:
-        for b in ("build/bin", "build-bench/bin"):
-            if os.path.exists(os.path.join(ROOT, b, "gudhi_trace")):
-                bindir = os.path.join(ROOT, b)
-                break
-    if bindir is None:
-        sys.exit("bench/run.sh: no build with bench/ programs (scripts/setup.sh --bench, then "
-                 "build; or pass --bindir)")
-    for p in ("ndcontour", "cgal_torus", "gudhi_trace"):
-        if not os.access(os.path.join(bindir, p), os.X_OK):
-            sys.exit(f"bench/run.sh: {bindir}/{p} missing")
+    bindir = find_bindir(ROOT, args.bindir, ("ndcontour", "cgal_torus", "gudhi_trace"),
+                         "bench/run.sh")
     problems = QUICK if args.quick else FULL
     if args.only:
         problems = {k: v for k, v in problems.items() if k in args.only.split(",")}

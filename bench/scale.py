@@ -43,7 +43,7 @@ ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import measure  # noqa: E402
-from tables import sh, spread, timed, write_section  # noqa: E402
+from tables import find_bindir, nearest, sh, spread, timed, write_section  # noqa: E402
 
 BEGIN, END = "<!-- scale-bench:begin -->", "<!-- scale-bench:end -->"
 DEPTHS = [3, 4, 5, 6]
@@ -139,17 +139,6 @@ def topology_text(r, k):
     return t + ("" if right else " (wrong)")
 
 
-def nearest(run, peers, limit=4.0):
-    best = None
-    for p in peers:
-        if not (0 < p["error"] < math.inf and 0 < run["error"] < math.inf):
-            continue
-        gap = abs(math.log(p["error"] / run["error"]))
-        if best is None or gap < best[0]:
-            best = (gap, p)
-    return best[1] if best and best[0] < math.log(limit) else None
-
-
 def fit(points):
     """Least squares of log t = log a + p log n: (a, p)."""
     x = np.log([p[0] for p in points])
@@ -203,15 +192,7 @@ def main(argv):
     ap.add_argument("--k", type=int, choices=(1, 2), default=None, help="one family only")
     ap.add_argument("--max-n", type=int, default=None)
     args = ap.parse_args(argv)
-    bindir = args.bindir
-    if bindir is None:
-        for b in ("build/bin", "build-bench/bin"):
-            if os.path.exists(os.path.join(ROOT, b, "gudhi_trace")):
-                bindir = os.path.join(ROOT, b)
-                break
-    if bindir is None or not os.access(os.path.join(bindir, "gudhi_trace"), os.X_OK):
-        sys.exit("bench/scale.py: no build with bench/ programs (scripts/setup.sh --bench, then "
-                 "build; or pass --bindir)")
+    bindir = find_bindir(ROOT, args.bindir, ("ndcontour", "gudhi_trace"), "bench/scale.py")
     family = QUICK if args.quick else FULL
     if args.k:
         family = {args.k: family[args.k]}
