@@ -194,8 +194,7 @@ class Validator : public TomlReader {
       // would exhaust memory instead of allocating without bound. An equation of total degree
       // at most 2 needs no dense form (densityFree): the default strategies enclose it by its
       // quadratic form, in time polynomial in n.
-      double coefficients = 1;
-      for (int d : e.degrees()) coefficients *= d + 1.0;
+      const double coefficients = denseCoefficients(e);
       if (coefficients > kMaxCoefficients && !densityFree(e)) {
         std::ostringstream message;
         message << what << " needs " << coefficients << " Bernstein coefficients (the product of "

@@ -32,9 +32,7 @@ bool LinearizedBounding<S>::hasPatch(const Expression& equation) {
   if (equation.tape().totalDegree(3) > 2) return true;
   // An affine equation's range is exact from its constant gradient (no halving, no scan).
   if (equation.tape().totalDegree(2) <= 1 && equation.tape().leaves().empty()) return false;
-  double coefficients = 1;
-  for (int d : equation.degrees()) coefficients *= d + 1;
-  return coefficients <= kMaxDensePatch;
+  return denseCoefficients(equation) <= kMaxDensePatch;
 }
 
 template <class S>

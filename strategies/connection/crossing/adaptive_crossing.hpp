@@ -694,8 +694,10 @@ class AdaptiveCrossing {
   std::vector<std::vector<EmptyCell>> blockEmpties_;  ///< its cells the bounding excluded
   std::vector<std::vector<Failure>> blockSaved_;
   std::int64_t refined_ = 0;
+  /// The most leaves of the tree, for memory: every leaf is a solution or a touch leaf
+  /// (refinement makes no leaf of an excluded child), so the solution-leaf budget binds first.
   static constexpr std::size_t kMaxLeaves = std::size_t{1} << 22;
-  std::size_t maxLeaves_ = 0, maxSolutionLeaves_ = 0;
+  std::size_t maxSolutionLeaves_ = 0;
   std::size_t solutionChildren_ = 0;  ///< solution children of the leaves refined so far
   bool refining_ = true;              ///< false: certify the base grid only (run's fallback)
   bool budgetSpent_ = false;

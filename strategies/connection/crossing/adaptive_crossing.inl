@@ -186,7 +186,7 @@ void AdaptiveCrossing<S>::record(TopologyRecord& t, std::int64_t degenerate) con
     }
     if (budgetSpent_) {
       why << "; refinement stopped at its budget of " << maxSolutionLeaves_
-          << " solution leaves and " << maxLeaves_ << " leaves";
+          << " solution leaves and " << kMaxLeaves << " leaves";
     }
   } else if (degenerate > 0) {
     why << degenerate << " crossings within rounding of a face boundary";

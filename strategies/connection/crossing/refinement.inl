@@ -18,9 +18,6 @@ void AdaptiveCrossing<S>::setBudget(std::size_t baseCells, bool tolerance, doubl
   const double byWork = refineSeconds / (workPerCell(in_.problem) * kSecondsPerWork);
   if (byWork < static_cast<double>(maxSolutionLeaves_))
     maxSolutionLeaves_ = static_cast<std::size_t>(std::max(byWork, 1.0));
-  // Every leaf is a solution leaf or a touch leaf (refinement makes no leaf of an excluded
-  // child): the second part only bounds memory.
-  maxLeaves_ = kMaxLeaves;
 }
 
 template <class S>
@@ -28,7 +25,7 @@ bool AdaptiveCrossing<S>::withinBudget(std::size_t refine) const {
   const double perLeaf =
       refined_ > 0 ? double(solutionChildren_) / double(refined_) : double(1 << k_);
   const auto predicted = static_cast<std::size_t>(double(refine) * perLeaf);
-  return tree_.size() + predicted <= maxLeaves_ &&
+  return tree_.size() + predicted <= kMaxLeaves &&
          tree_.solutionLeaves() + predicted <= maxSolutionLeaves_;
 }
 
