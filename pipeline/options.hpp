@@ -7,6 +7,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "framework/problem/problem.hpp"
 #include "framework/problem/summary.hpp"
@@ -32,6 +33,13 @@ struct SolveOptions {
   std::string maxMemory;  ///< `--max-memory SIZE` as given (parsed into settings)
   /// `--check`: exit with kExitExpectMismatch when the mesh differs from the problem's `[expect]`.
   bool check = false;
+  /// `--domain lo:hi,..`: solve on this box instead of the problem's domain (docs/split.md).
+  std::optional<std::string> domain;
+  /// `--split S`: cut the domain into S pieces solved apart and glued (docs/split.md).
+  std::optional<int> split;
+  std::string executor = "local";  ///< `--executor local|slurm` of `--split`
+  std::string slurmPartition;      ///< `--slurm-partition P` (Slurm executor)
+  std::string slurmArgs;           ///< `--slurm-args "..."`: further sbatch options
 };
 
 /// The longest `--timeout`: a year.

@@ -453,6 +453,8 @@ std::vector<std::uint8_t> refineCell(const Problem& problem, const Settings& set
   return halves;
 }
 
+}  // namespace
+
 /// A certified run must give a manifold mesh; the welded mesh is checked once more, so that a
 /// flaw between the certificate and the output (welding, joining at singular points) can
 /// never reach the user as a certified wrong answer.
@@ -490,6 +492,8 @@ void describeRun(Summary& summary, const Problem& problem, const Settings& setti
                         {"classification", choices.classification.parameters.json()},
                         {"connection", choices.connection.parameters.json()}};
 }
+
+namespace {
 
 /// B-spline input keeps its knots on grid planes: no jitter, and a depth at which every knot
 /// span is a grid cell.

@@ -45,6 +45,16 @@ struct StrategyChoices {
 /// Parses the strategy specs of `settings`; UsageError on an unknown name, parameter or value.
 StrategyChoices parseStrategies(const Settings& settings);
 
+/// Turns a certified topology record uncertified when the welded mesh has non-manifold edges,
+/// branch vertices (k = 1) or singular points: a flaw between the certificate and the output can
+/// never reach the user as a certified wrong answer.
+void checkCertificate(Summary& summary);
+
+/// The summary's header: the problem, and the settings with each strategy by name and its
+/// parameter values apart (contracts 4.3).
+void describeRun(Summary& summary, const Problem& problem, const Settings& settings,
+                 const StrategyChoices& choices, unsigned precisionBits);
+
 /// Runs the whole pipeline on a problem with the given settings. Strategy names are checked
 /// first (ndc::InputError on unknown names or a depth the grid cannot hold); the scalar is
 /// chosen at run time (`settings.scalar`, `settings.precisionBits`). `progress` may be empty;

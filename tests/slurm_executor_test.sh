@@ -3,7 +3,8 @@
 # (scripts/slurm-cluster.sh; ctest test `slurm`, registered when Slurm and MUNGE are installed:
 # scripts/setup.sh --slurm). Runs small grids with the local executor and with Slurm and checks
 # that the combined CSVs agree, that provenance.json records the Slurm job, that a second
-# invocation resumes (submits nothing) and that failures and timeouts are recorded alike.
+# invocation resumes (submits nothing), that failures and timeouts are recorded alike, and that
+# `solve --split` gives the same mesh on Slurm as locally.
 # Usage: tests/slurm_executor_test.sh NDCONTOUR   (as root; otherwise it exits 77: skipped)
 set -euo pipefail
 [[ $# -eq 1 ]] || {
@@ -136,5 +137,19 @@ compare slurm-timeout
 grep -q ",timeout,,timed out after 0.2 s" "$work/slurm/slurm-timeout/slurm-timeout.csv" ||
   fail "the timeout is not recorded"
 
+# 6. One solve split into pieces (solve --split, docs/split.md): the Slurm job array of the pieces
+# glues to the same mesh, byte for byte, as the local executor, and to the certified topology.
+for executor in local slurm; do
+  timeout 180 "$ndc" solve "$src/experiments/problems/torus.toml" --depth 4 --split 8 \
+    --executor "$executor" --out "$work/split-$executor" >"$work/split-$executor.out" \
+    2>"$work/split-$executor.err" || fail "solve --split --executor $executor: $(tail -n 3 "$work/split-$executor.err")"
+  grep -q "topology: certified" "$work/split-$executor.out" ||
+    fail "solve --split --executor $executor is not certified: $(cat "$work/split-$executor.out")"
+done
+grep -q "^slurm: submitted job [0-9]*: 8 tasks" "$work/split-slurm.err" ||
+  fail "solve --split --executor slurm submitted no job array of 8 tasks"
+cmp "$work/split-local/mesh.ply" "$work/split-slurm/mesh.ply" ||
+  fail "solve --split: the local and Slurm meshes differ"
+
 echo "slurm_executor_test: ok (local and Slurm CSVs agree; provenance, resume, failures and" \
-  "timeouts checked)"
+  "timeouts checked; a split solve gives the same mesh)"

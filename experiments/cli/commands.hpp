@@ -3,13 +3,16 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "experiments/cli/solve_options.hpp"
+#include "framework/io/result.hpp"
 #include "framework/problem/problem.hpp"
+#include "framework/strategy/strategy.hpp"
 
 namespace ndc::cli {
 
@@ -24,6 +27,21 @@ void printInfo(const Problem& problem, std::ostream& out);
 /// position are warnings on standard error, one line each. Returns the exit status: kExitOk, or
 /// kExitExpectMismatch with `--check` when a compared key of `[expect]` differs.
 int runSolve(SolveOptions options, const Problem& problem);
+
+/// What runSolve does after the run: `[expect]`, the outputs of `--out`, the warnings and the
+/// printed summary. Returns the exit status as runSolve.
+int reportSolve(const SolveOptions& options, const Problem& problem, RunResult& result);
+
+/// `ndcontour solve --split S` (docs/split.md): the pieces solved by `--executor` (local child
+/// processes, `--threads` at once, or one Slurm job array), glued and reported as runSolve
+/// reports a run. Their folders go to `--out`/pieces (a temporary folder without `--out`).
+int runSplitSolve(const SolveOptions& options, const Problem& problem);
+
+/// Fails early (before minutes of work) if `dir` cannot receive the outputs: InputError.
+void checkWritable(const std::filesystem::path& dir);
+
+/// A one-line progress bar on standard error, only when it is a terminal.
+Progress terminalProgress();
 
 /// Options of `ndcontour bench`.
 struct BenchOptions {

@@ -16,6 +16,7 @@
 #include "experiments/cli/report.hpp"
 #include "experiments/cli/solve_options.hpp"
 #include "framework/problem/problem.hpp"
+#include "pipeline/split.hpp"
 
 namespace {
 
@@ -96,8 +97,10 @@ int run(int argc, char** argv) {
 
   // solve: options first (they need no file), then the problem, then both together.
   ndc::cli::validateSolveOptions(solveOptions);
-  const ndc::Problem problem = ndc::loadProblem(solveOptions.problemPath);
+  ndc::Problem problem = ndc::loadProblem(solveOptions.problemPath);
+  if (solveOptions.domain) problem.domain = ndc::parseDomainText(*solveOptions.domain, problem.n());
   ndc::cli::validateSolveOptions(solveOptions, problem);
+  if (solveOptions.split) return ndc::cli::runSplitSolve(solveOptions, problem);
   return ndc::cli::runSolve(solveOptions, problem);
 }
 

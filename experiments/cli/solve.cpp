@@ -20,9 +20,8 @@
 #include "pipeline/pipeline.hpp"
 
 namespace ndc::cli {
-namespace {
+namespace {}  // namespace
 
-/// Fails early (before minutes of work) if `dir` cannot receive the outputs.
 void checkWritable(const std::filesystem::path& dir) {
   std::error_code error;
   std::filesystem::create_directories(dir, error);
@@ -37,7 +36,8 @@ void checkWritable(const std::filesystem::path& dir) {
   std::filesystem::remove(probe, error);
 }
 
-/// A one-line progress bar on standard error, only when it is a terminal.
+namespace {}  // namespace
+
 Progress terminalProgress() {
   if (!::isatty(STDERR_FILENO)) return {};
   return [](const char* stage, double fraction) {
@@ -48,6 +48,8 @@ Progress terminalProgress() {
     std::fflush(stderr);
   };
 }
+
+namespace {
 
 /// Numbers as `(a, b, c)` (or between other brackets) in the stream's default precision.
 std::string listText(const std::vector<double>& values, char open = '(', char close = ')') {
@@ -186,6 +188,10 @@ int runSolve(SolveOptions options, const Problem& problem) {
   armBudgets(options, problem);
   RunResult result = solveWithin(problem, options.settings);
   if (!options.outDir) disarmTimeout();
+  return reportSolve(options, problem, result);
+}
+
+int reportSolve(const SolveOptions& options, const Problem& problem, RunResult& result) {
   // docs/contracts.md 4.5: the mesh against the problem's [expect] (none: no `expect` in the
   // summary).
   result.summary.expect = checkExpectation(problem.expect, result.summary.mesh, result.k);

@@ -11,6 +11,7 @@
 
 #include "framework/problem/budget.hpp"
 #include "pipeline/pipeline.hpp"
+#include "pipeline/split.hpp"
 #include "strategies/bounding/bounding.hpp"
 #include "strategies/classification/classification.hpp"
 #include "strategies/connection/connection.hpp"
@@ -136,6 +137,30 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
                       std::to_string(kExitTimeout) + "; --out keeps its previous run)")
       ->type_name("SECONDS");
   addThreadsOption(solve, s.threads);
+  solve
+      .add_option("--domain", o.domain,
+                  "Solve on this box instead of the problem's domain: lo:hi for each variable, "
+                  "comma-separated")
+      ->type_name("LO:HI,...");
+  solve
+      .add_option("--split", o.split,
+                  "Cut the domain into S pieces (a power of two, up to " +
+                      std::to_string(kMaxSplitPieces) +
+                      ") on grid planes, solve each apart and glue them into one mesh "
+                      "(docs/split.md); --threads pieces at once with the local executor")
+      ->type_name("S");
+  solve
+      .add_option("--executor", o.executor,
+                  "Where the pieces of --split run: local (child processes) or slurm (one "
+                  "sbatch job array; needs --out on a folder the nodes share)")
+      ->type_name("local|slurm")
+      ->capture_default_str();
+  solve.add_option("--slurm-partition", o.slurmPartition, "Slurm executor: sbatch --partition")
+      ->type_name("P");
+  solve
+      .add_option("--slurm-args", o.slurmArgs,
+                  "Slurm executor: further sbatch options, split at spaces (e.g. \"--mem=4G\")")
+      ->type_name("\"...\"");
   solve.add_flag("--json", o.json, "Print the summary (JSON) on standard output, nothing else");
   solve.add_flag("--check", o.check,
                  "Exit with status " + std::to_string(kExitExpectMismatch) +

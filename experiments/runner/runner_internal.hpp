@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "experiments/runner/experiment.hpp"
+#include "experiments/runner/slurm.hpp"
 #include "framework/problem/summary.hpp"
 
 namespace ndc::runner_detail {
@@ -126,6 +127,14 @@ std::string runOnSlurm(const ExperimentConfig& config, const ExperimentOptions& 
                        const std::vector<std::size_t>& pending,
                        const std::function<void(std::size_t, const Outcome&)>& finished,
                        const std::function<void()>& tick);
+
+/// Runs `tasks` as one Slurm job array (`job` gives its name, executable, log and working
+/// folders, limits and sbatch options; the task list and script go into its log folder) and
+/// calls `finished(t, outcome)` as task t's outcome appears; `tick` is called while waiting.
+/// Returns the job id. Throws as runOnSlurm.
+std::string runTasksOnSlurm(SlurmJob job, const std::vector<SlurmTask>& tasks,
+                            const std::function<void(std::size_t, const Outcome&)>& finished,
+                            const std::function<void()>& tick);
 
 /// Sets gInterrupted on SIGINT and SIGTERM; restores the previous handlers at scope exit.
 class InterruptScope {

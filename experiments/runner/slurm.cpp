@@ -145,7 +145,8 @@ std::string slurmBatchScript(const SlurmJob& job) {
   return "#!/bin/sh\n"
          "# " +
          job.name +
-         ": written and submitted by `ndcontour experiment --executor slurm` as\n"
+         ": written and submitted by `ndcontour experiment` or `solve --split` (`--executor "
+         "slurm`) as\n"
          "#   " +
          submit +
          "\n"
@@ -393,6 +394,24 @@ std::string waitForJob(const Submission& s, pid_t sbatch,
   return jobId;
 }
 
+/// Submits a prepared job array with sbatch and waits for it (waitForJob). Returns the job id
+/// ("" when there was nothing to submit).
+std::string submitAndWait(const Submission& s,
+                          const std::function<void(std::size_t, const Outcome&)>& finished,
+                          const std::function<void()>& tick) {
+  if (s.tasks.empty()) {
+    std::fprintf(stderr, "slurm: nothing to submit\n");
+    std::fflush(stderr);
+    return "";
+  }
+  std::string error;
+  const pid_t pid =
+      runner_detail::spawnRun(findOnPath("sbatch").string(), sbatchArguments(s.job),
+                              s.job.logDir / "sbatch.err", error, s.job.logDir / "sbatch.out");
+  if (pid < 0) throw InputError(error);
+  return waitForJob(s, pid, finished, tick);
+}
+
 }  // namespace
 
 namespace runner_detail {
@@ -402,22 +421,30 @@ std::string runOnSlurm(const ExperimentConfig& config, const ExperimentOptions& 
                        const std::vector<std::size_t>& pending,
                        const std::function<void(std::size_t, const Outcome&)>& finished,
                        const std::function<void()>& tick) {
-  const fs::path sbatch = findOnPath("sbatch");
-  if (sbatch.empty()) throw UsageError("--executor slurm: sbatch not found on PATH");
+  if (findOnPath("sbatch").empty()) throw UsageError("--executor slurm: sbatch not found on PATH");
   // Every run finished before: the files of the latest submission stay as they are.
   const Submission s = pending.empty()
                            ? Submission{}
                            : prepareSubmission(config, options, runs, dir, pending, finished);
-  if (s.tasks.empty()) {
-    std::fprintf(stderr, "slurm: nothing to submit\n");
-    std::fflush(stderr);
-    return "";
-  }
-  std::string error;
-  const pid_t pid = spawnRun(sbatch.string(), sbatchArguments(s.job), s.job.logDir / "sbatch.err",
-                             error, s.job.logDir / "sbatch.out");
-  if (pid < 0) throw InputError(error);
-  return waitForJob(s, pid, finished, tick);
+  return submitAndWait(s, finished, tick);
+}
+
+std::string runTasksOnSlurm(SlurmJob job, const std::vector<SlurmTask>& tasks,
+                            const std::function<void(std::size_t, const Outcome&)>& finished,
+                            const std::function<void()>& tick) {
+  if (findOnPath("sbatch").empty()) throw UsageError("--executor slurm: sbatch not found on PATH");
+  Submission s;
+  s.tasks = tasks;
+  for (std::size_t t = 0; t < tasks.size(); ++t) s.runOf.push_back(t);
+  job.tasksFile = job.logDir / "tasks.tsv";
+  job.script = job.logDir / "job.sh";
+  job.tasks = tasks.size();
+  s.job = std::move(job);
+  std::string list;
+  for (const SlurmTask& task : s.tasks) list += slurmTaskLine(task) + "\n";
+  writeAtomically(s.job.tasksFile, list);
+  if (!s.tasks.empty()) writeAtomically(s.job.script, slurmBatchScript(s.job));
+  return submitAndWait(s, finished, tick);
 }
 
 }  // namespace runner_detail

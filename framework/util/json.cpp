@@ -10,11 +10,16 @@ namespace ndc {
 
 namespace {
 
-/// A recursive-descent reader of the JSON that summary.json holds, collecting numbers (or, with
-/// `leaves`, every leaf with an empty text).
+/// What a JsonFlattener keeps.
+enum class Keep { numbers, paths, values };
+
+/// A recursive-descent reader of the JSON that summary.json holds, collecting numbers
+/// (Keep::numbers), every leaf with an empty text (Keep::paths) or every leaf with its value
+/// (Keep::values).
 class JsonFlattener {
  public:
-  explicit JsonFlattener(std::string_view text, bool leaves = false) : s_(text), leaves_(leaves) {}
+  explicit JsonFlattener(std::string_view text, Keep keep = Keep::numbers)
+      : s_(text), keep_(keep) {}
 
   std::vector<std::pair<std::string, std::string>> run() {
     value("", 0);
@@ -22,6 +27,9 @@ class JsonFlattener {
     if (i_ != s_.size()) error("text after the JSON value");
     return std::move(out_);
   }
+
+  /// The kind of each leaf of run(), in order (Keep::values only).
+  std::vector<JsonKind> kinds() const { return kinds_; }
 
  private:
   [[noreturn]] void error(const std::string& what) const {
@@ -48,10 +56,7 @@ class JsonFlattener {
     while (i_ < s_.size() && s_[i_] != '"') {
       if (s_[i_] == '\\') {
         if (++i_ >= s_.size()) break;
-        // Escapes are kept loosely: only key names and skipped strings use them.
-        out += s_[i_] == 'u' ? '?' : s_[i_];
-        if (s_[i_] == 'u') i_ += 4;
-        ++i_;
+        escape(out);
       } else {
         out += s_[i_++];
       }
@@ -60,6 +65,47 @@ class JsonFlattener {
     ++i_;
     return out;
   }
+  /// One escape after its backslash: the character it stands for, in UTF-8.
+  void escape(std::string& out) {
+    const char c = s_[i_++];
+    switch (c) {
+      case 'n':
+        out += '\n';
+        return;
+      case 't':
+        out += '\t';
+        return;
+      case 'r':
+        out += '\r';
+        return;
+      case 'b':
+        out += '\b';
+        return;
+      case 'f':
+        out += '\f';
+        return;
+      case 'u':
+        break;
+      default:
+        out += c;
+        return;
+    }
+    if (i_ + 4 > s_.size()) error("bad \\u escape");
+    const unsigned long code = std::strtoul(std::string(s_.substr(i_, 4)).c_str(), nullptr, 16);
+    i_ += 4;
+    // Code points of the Basic Multilingual Plane (a surrogate stays as it is read).
+    if (code < 0x80) {
+      out += static_cast<char>(code);
+    } else if (code < 0x800) {
+      out += static_cast<char>(0xC0 | (code >> 6));
+      out += static_cast<char>(0x80 | (code & 0x3F));
+    } else {
+      out += static_cast<char>(0xE0 | (code >> 12));
+      out += static_cast<char>(0x80 | ((code >> 6) & 0x3F));
+      out += static_cast<char>(0x80 | (code & 0x3F));
+    }
+  }
+
   void value(const std::string& path, int depth) {
     if (depth > 64) error("nested too deeply");
     space();
@@ -67,7 +113,7 @@ class JsonFlattener {
     const char c = s_[i_];
     if (c == '{') {
       ++i_;
-      if (take('}')) return leaf(path);
+      if (take('}')) return leaf(path, JsonKind::empty);
       do {
         space();
         const std::string key = string();
@@ -77,22 +123,22 @@ class JsonFlattener {
       expect('}');
     } else if (c == '[') {
       ++i_;
-      if (take(']')) return leaf(path);
+      if (take(']')) return leaf(path, JsonKind::empty);
       int index = 0;
       do value(path + "." + std::to_string(index++), depth + 1);
       while (take(','));
       expect(']');
     } else if (c == '"') {
-      string();
-      leaf(path);
+      leaf(path, JsonKind::string, string());
     } else if (s_.substr(i_, 4) == "true") {
       i_ += 4;
-      leaf(path);
+      leaf(path, JsonKind::boolean, "true");
     } else if (s_.substr(i_, 5) == "false") {
       i_ += 5;
-      leaf(path);
+      leaf(path, JsonKind::boolean, "false");
     } else if (s_.substr(i_, 4) == "null") {
       i_ += 4;
+      if (keep_ == Keep::values) return leaf(path, JsonKind::null);
       out_.emplace_back(path, "");
     } else {
       const std::size_t start = i_;
@@ -102,17 +148,21 @@ class JsonFlattener {
       if (number.empty()) error("unexpected character");
       std::strtod(number.c_str(), &end);
       if (end != number.c_str() + number.size()) error("bad number '" + number + "'");
+      if (keep_ == Keep::values) return leaf(path, JsonKind::number, number);
       out_.emplace_back(path, number);
     }
   }
 
-  /// Records a leaf that is not a number or null (only when collecting every leaf).
-  void leaf(const std::string& path) {
-    if (leaves_) out_.emplace_back(path, "");
+  /// Records a leaf that is not a number or null (kept with Keep::paths and Keep::values).
+  void leaf(const std::string& path, JsonKind kind, std::string text = {}) {
+    if (keep_ == Keep::numbers) return;
+    out_.emplace_back(path, keep_ == Keep::values ? std::move(text) : std::string());
+    if (keep_ == Keep::values) kinds_.push_back(kind);
   }
 
   std::string_view s_;
-  bool leaves_;
+  Keep keep_;
+  std::vector<JsonKind> kinds_;
   std::size_t i_ = 0;
   std::vector<std::pair<std::string, std::string>> out_;
 };
@@ -125,8 +175,20 @@ std::vector<std::pair<std::string, std::string>> flattenJsonNumbers(std::string_
 
 std::vector<std::string> jsonLeafPaths(std::string_view json) {
   std::vector<std::string> paths;
-  for (auto& [path, text] : JsonFlattener(json, true).run()) paths.push_back(std::move(path));
+  for (auto& [path, text] : JsonFlattener(json, Keep::paths).run())
+    paths.push_back(std::move(path));
   return paths;
+}
+
+std::vector<JsonLeaf> jsonLeaves(std::string_view json) {
+  JsonFlattener reader(json, Keep::values);
+  auto leaves = reader.run();
+  const std::vector<JsonKind> kinds = reader.kinds();
+  std::vector<JsonLeaf> out;
+  out.reserve(leaves.size());
+  for (std::size_t i = 0; i < leaves.size(); ++i)
+    out.push_back({std::move(leaves[i].first), std::move(leaves[i].second), kinds[i]});
+  return out;
 }
 
 }  // namespace ndc

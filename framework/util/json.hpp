@@ -20,4 +20,19 @@ std::vector<std::pair<std::string, std::string>> flattenJsonNumbers(std::string_
 /// std::runtime_error on malformed JSON.
 std::vector<std::string> jsonLeafPaths(std::string_view json);
 
+/// The kind of a JSON leaf.
+enum class JsonKind { number, string, boolean, null, empty };
+
+/// One leaf of a JSON document: its dotted path, its text (a number as written, a string
+/// unescaped, `true` or `false`; empty for null and for an empty object or array) and its kind.
+struct JsonLeaf {
+  std::string path;
+  std::string text;
+  JsonKind kind = JsonKind::null;
+};
+
+/// Every leaf of a JSON document with its value, in document order (a summary.json read back:
+/// the pieces of a split solve, docs/split.md). Throws std::runtime_error on malformed JSON.
+std::vector<JsonLeaf> jsonLeaves(std::string_view json);
+
 }  // namespace ndc
