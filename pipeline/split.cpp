@@ -143,6 +143,18 @@ void mergeRecords(Summary& s, const SplitPlan& plan, const std::vector<PieceOutp
     s.estimatedMemory = std::max(s.estimatedMemory, j.number("budget.estimated_memory_bytes"));
     s.estimatedSeconds += j.number("budget.estimated_time_s");
   }
+  // A singular point on a face two pieces share is found by both: keep one.
+  std::vector<SingularPoint> points;
+  const double tolerance = glueTolerance(plan);
+  for (SingularPoint& p : s.singularPoints) {
+    const auto same = [&](const SingularPoint& q) {
+      for (std::size_t j = 0; j < p.point.size(); ++j)
+        if (!(std::abs(p.point[j] - q.point[j]) <= tolerance)) return false;
+      return q.point.size() == p.point.size();
+    };
+    if (std::none_of(points.begin(), points.end(), same)) points.push_back(std::move(p));
+  }
+  s.singularPoints = std::move(points);
   if (!reasons.empty()) {
     t.reason = std::to_string(reasons.size()) + " of " + std::to_string(pieces.size()) +
                " pieces not certified; " + reasons.front();
