@@ -19,7 +19,7 @@ subset=
 # ([applications] is left out: its solves take minutes each under ASan, e.g. 340 s for the
 # rolling-ball blend; application files are read by [geometry], [hostile] and [corpus].)
 for tag in problem expression geometry hostile bernstein form-rounding subdivision connection certificate analysis \
-  corpus ply; do
+  corpus ply glue; do
   subset+="${subset:+,}[$tag]~[slow]~[.]"
 done
 

@@ -340,6 +340,13 @@ class AdaptiveCrossing {
   /// Crossings, certificates and refinement until every leaf is certified or at the maximum
   /// level (or the leaf budget is spent). Returns the degenerate crossings of the last pass.
   std::int64_t refineAndCertify();
+  /// Whether refinement will still try leaf c if it fails: refinement is on, c is above the
+  /// maximum level and not next to crossings no refinement separates.
+  bool refinable(std::int32_t c) const;
+  /// Whether M is tangent to the plane of one of leaf c's unproven faces, or (a face graph
+  /// failure) of one of its facets: tangentToFace (domain_boundary.hpp) on each. There no
+  /// refinement proves the leaf, and it tries blocks at once (a heuristic: it proves nothing).
+  bool tangentToGridPlane(std::int32_t c) const;
 
   // ---- chord_refinement.inl: --tolerance, the leaves whose mesh is beyond the chord error
   /// `--tolerance`: the leaves below the maximum level that are nodes of a mesh polygon inside
@@ -701,6 +708,9 @@ class AdaptiveCrossing {
   std::size_t solutionChildren_ = 0;  ///< solution children of the leaves refined so far
   bool refining_ = true;              ///< false: certify the base grid only (run's fallback)
   bool budgetSpent_ = false;
+  /// Blocks for every failing leaf, also those refinement could still prove (mergeBlocks):
+  /// set for the last certify of a run whose refinement stopped at its budget.
+  bool blocksEverywhere_ = false;
 };
 
 // The one explicit instantiation definition of each (a program may hold only one) is in

@@ -133,12 +133,21 @@ void FaceSolver<S>::recurse(const std::vector<Bernstein<S>>& patches, const Face
     roots.push_back(fullPoint(y));
     return;
   }
-  // Undecided at the smallest face size, or after the face's budget of boxes (where F = c
-  // has a continuum of roots on the face, as on a degenerate surface patch, the recursion
-  // would otherwise visit up to 2^(maxDepth m) boxes): keep Newton's root, flag the face
-  // uncertain.
-  if (depth >= maxDepth_ * m_ || ++boxes_ > kMaxBoxes) {
+  // Undecided at the smallest face size (a tangency, or F = c with a continuum of roots on
+  // the face, as on a degenerate surface patch: the depth-first recursion follows it down to
+  // there first): keep Newton's root, flag the face uncertain; no finer face decides it.
+  if (depth >= maxDepth_ * m_) {
     certain_ = false;
+    if (found) roots.push_back(fullPoint(root));
+    return;
+  }
+  // The face's budget of boxes spent with no box at the smallest size: a face too large to
+  // decide within it (a coarse leaf's face of a surface in R^10 has 8 free axes), unproven but
+  // not uncertain: its leaves fail and are refined, and smaller faces are decided (until
+  // issue 42 this flagged the face uncertain, so the leaves were never refined and the
+  // 2-sphere in R^10 stayed uncertified at depths 3 and 4).
+  if (++boxes_ > kMaxBoxes) {
+    proven_ = false;
     if (found) roots.push_back(fullPoint(root));
     return;
   }

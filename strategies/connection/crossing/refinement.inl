@@ -30,6 +30,11 @@ bool AdaptiveCrossing<S>::withinBudget(std::size_t refine) const {
 }
 
 template <class S>
+bool AdaptiveCrossing<S>::refinable(std::int32_t c) const {
+  return in_.refine && refining_ && tree_.level(c) < tree_.maxLevel() && !perLeaf_.stuck[c];
+}
+
+template <class S>
 std::int64_t AdaptiveCrossing<S>::refineAndCertify() {
   tree_ = CellTree(grid_, tree_.maxLevel());
   tree_.addBaseCells(in_.cells);
@@ -57,7 +62,11 @@ std::int64_t AdaptiveCrossing<S>::refineAndCertify() {
     if (refine.empty() && in_.tolerance > 0 && refining_) refine = chordLeaves();
     if (refine.empty() || !in_.refine || !refining_) return degenerate;
     if (!withinBudget(refine.size())) {
+      // No refinement follows: the leaves it would have proved try blocks after all.
       budgetSpent_ = true;
+      blocksEverywhere_ = true;
+      certify();
+      blocksEverywhere_ = false;
       return degenerate;
     }
     // The children's bounding tests in parallel, the tree's growth in order.
