@@ -16,4 +16,4 @@ fi
 scripts/build.sh
 ctest --test-dir build --output-on-failure
 scripts/sanitize.sh --subset
-scripts/fuzz.sh --seconds 60
+scripts/fuzz.sh --seconds 45

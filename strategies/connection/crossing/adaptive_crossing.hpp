@@ -167,6 +167,9 @@ class AdaptiveCrossing {
   /// that no face costs (d + 1)^m per box for large m (docs/performance.md,
   /// "Without dense forms").
   static constexpr double kMaxFaceCoefficients = 32768;
+  /// Faces whose slices have at most this many coefficients are solved on them at every level;
+  /// larger ones only at the maximum level, or where refinement is off (solveFace).
+  static constexpr double kCheapFaceCoefficients = 1024;
   /// The most Bernstein coefficients (all m equations' dense forms on a leaf) the certificate's
   /// tests restrict to a leaf where evaluation does not decide: beyond (a quadric in R^12 has
   /// 3^12 = 531441), such a test fails, and the leaf is refined or left uncertified, so that no
