@@ -59,48 +59,27 @@ std::string word(double value) {
   return buffer;
 }
 
-/// The `ndcontour solve` of piece p: the problem on the piece's box at the piece's depths, the
-/// strategies and limits of the whole solve, one thread, its outputs into `dir`.
+/// The `ndcontour solve` of piece p: the run's own arguments (as the experiment runner writes
+/// them) at the piece's depth, on one thread, with the memory budget shared by the pieces that
+/// run at once on this machine (a Slurm node has its own: the user's --max-memory, if any,
+/// applies to each task), then the piece's box, its maximum depth and the chord tolerance.
 std::vector<std::string> pieceCommand(const SolveOptions& o, const SplitPlan& plan, std::size_t p,
                                       const fs::path& dir, int atOnce) {
-  const Settings& s = o.settings;
+  Settings s = o.settings;
+  s.depth = plan.pieceDepth;
+  s.threads = 1;
+  if (o.executor == "local")
+    s.maxMemoryBytes = static_cast<std::uint64_t>(
+        static_cast<double>(s.maxMemoryBytes ? s.maxMemoryBytes : defaultMemoryBudget()) / atOnce);
   std::error_code ec;
   fs::path executable = fs::canonical("/proc/self/exe", ec);
   if (ec) executable = "ndcontour";
-  std::vector<std::string> c = {executable.string(),
-                                "solve",
-                                fs::absolute(o.problemPath).string(),
-                                "--domain",
-                                domainText(plan.boxes[p]),
-                                "--depth",
-                                std::to_string(plan.pieceDepth),
-                                "--max-depth",
-                                std::to_string(plan.pieceMaxDepth),
-                                "--bounding",
-                                s.bounding,
-                                "--subdivision",
-                                s.subdivision,
-                                "--classification",
-                                s.classification,
-                                "--connection",
-                                s.connection,
-                                "--scalar",
-                                s.scalar,
-                                "--threads",
-                                "1",
-                                "--out",
-                                dir.string()};
-  if (s.scalar != "double") c.insert(c.end(), {"--precision", std::to_string(s.precisionBits)});
+  std::vector<std::string> c = {executable.string()};
+  for (std::string& a : solveArguments(fs::absolute(o.problemPath).string(), dir.string(), s))
+    c.push_back(std::move(a));
+  c.insert(c.end(), {"--domain", domainText(plan.boxes[p]), "--max-depth",
+                     std::to_string(plan.pieceMaxDepth)});
   if (o.tolerance) c.insert(c.end(), {"--tolerance", word(*o.tolerance)});
-  // The memory budget is shared by the pieces that run at once on this machine; a Slurm node
-  // has its own (the user's --max-memory, if any, applies to each task).
-  const double budget =
-      static_cast<double>(s.maxMemoryBytes ? s.maxMemoryBytes : defaultMemoryBudget());
-  if (o.executor == "local")
-    c.insert(c.end(),
-             {"--max-memory", std::to_string(static_cast<std::uint64_t>(budget / atOnce))});
-  else if (s.maxMemoryBytes)
-    c.insert(c.end(), {"--max-memory", std::to_string(s.maxMemoryBytes)});
   return c;
 }
 

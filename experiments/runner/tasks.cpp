@@ -71,6 +71,11 @@ void runLocally(const std::vector<SlurmTask>& tasks, int jobs,
 
 }  // namespace
 
+std::vector<std::string> solveArguments(const std::string& problem, const std::string& outDir,
+                                        const Settings& settings) {
+  return runner_detail::solveArguments(problem, outDir, settings, false);
+}
+
 std::vector<TaskOutcome> runTasks(
     const std::vector<SlurmTask>& tasks, const TaskExecutor& executor,
     const std::function<void(std::size_t, const TaskOutcome&)>& finished) {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "experiments/runner/slurm.hpp"
+#include "framework/problem/summary.hpp"
 
 namespace ndc {
 
@@ -32,6 +33,12 @@ struct TaskOutcome {
   std::string error;            ///< the last line of its standard error, or why it did not run
   double seconds = 0;           ///< its wall-clock time
 };
+
+/// The arguments of `ndcontour solve PROBLEM --out DIR` (without the program name) for
+/// `settings`, as the experiment runner writes a run's: depth, strategies, scalar and precision,
+/// jitter, threads and memory when set, and `--json`.
+std::vector<std::string> solveArguments(const std::string& problem, const std::string& outDir,
+                                        const Settings& settings);
 
 /// Runs every task (SlurmTask::command in SlurmTask::runDir's stead: standard error into
 /// `runDir/stderr.txt`, stopped past SlurmTask::timeoutS) and calls `finished(t, outcome)` as

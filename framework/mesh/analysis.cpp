@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "framework/numeric/parallel.hpp"
+#include "framework/util/disjoint_sets.hpp"
 #include "framework/util/flat_map.hpp"
 
 namespace ndc {
@@ -54,26 +55,6 @@ std::uint64_t edgeKey(std::int32_t a, std::int32_t b) {
   return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
          static_cast<std::uint32_t>(b);
 }
-
-/// Union-find over vertex numbers, for the connected components.
-class DisjointSets {
- public:
-  explicit DisjointSets(std::size_t n) : parent_(n) {
-    std::iota(parent_.begin(), parent_.end(), std::int32_t{0});
-  }
-  std::int32_t find(std::int32_t v) {
-    while (parent_[v] != v) v = parent_[v] = parent_[parent_[v]];
-    return v;
-  }
-  void unite(std::int32_t a, std::int32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
-  }
-
- private:
-  std::vector<std::int32_t> parent_;
-};
 
 /// Every (d+1)-vertex subset of a simplex, sorted, appended to `faces` (d + 1 ints each).
 void subsets(std::span<const std::int32_t> simplex, int size, std::vector<std::int32_t>& chosen,

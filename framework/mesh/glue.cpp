@@ -8,6 +8,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "framework/util/disjoint_sets.hpp"
+
 namespace ndc {
 
 namespace {
@@ -44,8 +46,7 @@ class Gluer {
       first_.push_back(first_.back() + count);
       coords_.insert(coords_.end(), piece.vertices.begin(), piece.vertices.end());
     }
-    parent_.resize(owner_.size());
-    std::iota(parent_.begin(), parent_.end(), 0);
+    sets_ = DisjointSets(owner_.size());
     simplices_.resize(pieces.size());
     boundary_.resize(pieces.size());
     for (std::size_t p = 0; p < pieces.size(); ++p) {
@@ -126,15 +127,8 @@ class Gluer {
     return coords_.data() + static_cast<std::size_t>(v) * n_;
   }
 
-  std::int32_t find(std::int32_t v) {
-    while (parent_[v] != v) v = parent_[v] = parent_[parent_[v]];
-    return v;
-  }
-  void unite(std::int32_t a, std::int32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
-  }
+  std::int32_t find(std::int32_t v) { return sets_.find(v); }
+  void unite(std::int32_t a, std::int32_t b) { sets_.unite(a, b); }
 
   bool close(std::int32_t a, std::int32_t b) const {
     for (int j = 0; j < n_; ++j)
@@ -317,7 +311,7 @@ class Gluer {
   std::vector<std::int32_t> first_;
   std::vector<int> owner_;
   std::vector<double> coords_;
-  std::vector<std::int32_t> parent_;
+  DisjointSets sets_{0};
   std::vector<std::vector<std::int32_t>> simplices_;
   std::vector<std::unordered_map<std::uint64_t, std::int32_t>> boundary_;
   std::int64_t matched_ = 0, inserted_ = 0;
