@@ -133,6 +133,7 @@ void mergeRecords(Summary& s, const SplitPlan& plan, const std::vector<PieceOutp
     t.refinedCells += j.integer("topology.refined_cells");
     t.uncertifiedCells += j.integer("topology.uncertified_cells");
     t.blockCells += j.integer("topology.block_cells");
+    t.facesSolved += j.integer("topology.faces_solved");
     t.maxLevel =
         std::max(t.maxLevel, static_cast<int>(j.integer("topology.max_level")) + plan.levels);
     readUncertified(pieces[p].uncertifiedCsv, s.n, plan.levels, t.uncertified);

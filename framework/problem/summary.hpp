@@ -103,6 +103,9 @@ struct TopologyRecord {
   /// Certified leaves that are certified together, in blocks of 2^n leaves around a point
   /// where M touches a grid plane (docs/certificate.md, "Blocks"); counted in certifiedCells.
   std::int64_t blockCells = 0;
+  /// Minimal m-faces solved for crossings, over every round of refinement and every attempt
+  /// (a measure of the connection's work that does not depend on the machine).
+  std::int64_t facesSolved = 0;
   int baseLevel = 0;  ///< `--depth`
   int maxLevel = 0;   ///< the deepest level a leaf reached
   int maxDepth = 0;   ///< the limit of refinement (`--max-depth`)

@@ -47,7 +47,8 @@ ndc::Summary fullSummary(bool comparable) {
   s.topology.certified = false;
   s.topology.reason = "crossing";
   s.topology.certifiedCells = 13, s.topology.refinedCells = 14, s.topology.uncertifiedCells = 15;
-  s.topology.blockCells = 16, s.topology.baseLevel = 7, s.topology.maxLevel = 9;
+  s.topology.blockCells = 16, s.topology.facesSolved = 17, s.topology.baseLevel = 7,
+  s.topology.maxLevel = 9;
   s.topology.maxDepth = 16;
   s.singularPoints = {{{0.5, -0.25, 0, 1}, 1e-9}, {{1, 2, 3, 4}, 0.125}};
   ndc::ExpectCheck a;
@@ -105,7 +106,7 @@ TEST_CASE("summary schema: the bytes of summary.json", "[summary][experiment]") 
       {"point": [1, 2, 3, 4], "sigma_min": 0.125}
     ],
     "perturbation": {"level": [9.9999999999999995e-08, -1.9999999999999999e-07], "attempts": 3, "degenerate_crossings": 4}},
-  "topology": {"certified": false, "reason": "crossing", "certified_cells": 13, "refined_cells": 14, "uncertified_cells": 15, "block_cells": 16, "base_level": 7, "max_level": 9, "max_depth": 16},
+  "topology": {"certified": false, "reason": "crossing", "certified_cells": 13, "refined_cells": 14, "uncertified_cells": 15, "block_cells": 16, "faces_solved": 17, "base_level": 7, "max_level": 9, "max_depth": 16},
   "timing_s": {"subdivision": 0.5, "projection": 0.25, "connection": 0.33333333333333331, "analysis": 0, "total": null},
   "budget": {"max_memory_bytes": 1073741824, "estimated_memory_bytes": 123456.5, "timeout_s": 12.5, "estimated_time_s": 2.75},
   "expect": {"components": {"wanted": 2, "got": 2, "ok": true}, "genus": {"wanted": 1, "got": 0, "ok": false}},
@@ -127,7 +128,7 @@ TEST_CASE("summary schema: the bytes of summary.json", "[summary][experiment]") 
       {"point": [1, 2, 3, 4], "sigma_min": 0.125}
     ],
     "perturbation": {"level": [9.9999999999999995e-08, -1.9999999999999999e-07], "attempts": 3, "degenerate_crossings": 4}},
-  "topology": {"certified": false, "reason": "crossing", "certified_cells": 13, "refined_cells": 14, "uncertified_cells": 15, "block_cells": 16, "base_level": 7, "max_level": 9, "max_depth": 16},
+  "topology": {"certified": false, "reason": "crossing", "certified_cells": 13, "refined_cells": 14, "uncertified_cells": 15, "block_cells": 16, "faces_solved": 17, "base_level": 7, "max_level": 9, "max_depth": 16},
   "timing_s": {"subdivision": 0.5, "projection": 0.25, "connection": 0.33333333333333331, "analysis": 0, "total": null},
   "budget": {"max_memory_bytes": 1073741824, "estimated_memory_bytes": 123456.5, "timeout_s": 12.5, "estimated_time_s": 2.75},
   "expect": {"components": {"wanted": 2, "got": 2, "ok": true}, "genus": {"wanted": 1, "got": null, "ok": null, "not_comparable": "not one closed surface"}},
@@ -146,7 +147,7 @@ TEST_CASE("summary schema: the bytes of summary.json", "[summary][experiment]") 
   "diagnostics": {"ambiguous_cells": 0, "singular_cells": 0, "chord_failures": 0, "off_manifold_vertices": 0, "empty_zero_set": true,
     "singular_points": [],
     "perturbation": {"level": [], "attempts": 0, "degenerate_crossings": 0}},
-  "topology": {"certified": false, "reason": null, "certified_cells": 0, "refined_cells": 0, "uncertified_cells": 0, "block_cells": 0, "base_level": 0, "max_level": 0, "max_depth": 0},
+  "topology": {"certified": false, "reason": null, "certified_cells": 0, "refined_cells": 0, "uncertified_cells": 0, "block_cells": 0, "faces_solved": 0, "base_level": 0, "max_level": 0, "max_depth": 0},
   "timing_s": {"subdivision": 0, "projection": 0, "connection": 0, "analysis": 0, "total": 0},
   "budget": {"max_memory_bytes": 0, "estimated_memory_bytes": 0, "timeout_s": null, "estimated_time_s": 0}
 }
@@ -183,7 +184,7 @@ TEST_CASE("summary schema: the writer writes every field in the table's order",
         "diagnostics.singular_points[].point");
   CHECK(ndc::summaryFieldOf("mesh.genus") == nullptr);
   CHECK(ndc::kExperimentSummaryColumns.front() == "cells.visited");
-  CHECK(ndc::kExperimentSummaryColumns.back() == "budget.estimated_time_s");
+  CHECK(ndc::kExperimentSummaryColumns.back() == "topology.faces_solved");
 }
 
 TEST_CASE("summary schema: docs/contracts.md 4.3 and 4.5 show exactly the table's fields",

@@ -23,6 +23,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <span>
 #include <unordered_map>
@@ -175,6 +176,10 @@ class AdaptiveCrossing {
   /// 3^12 = 531441), such a test fails, and the leaf is refined or left uncertified, so that no
   /// leaf costs (d + 1)^n. Only programs without patch leaves go without (byEvaluation_).
   static constexpr double kMaxLeafCoefficients = 262144;
+  /// The dense forms' coefficients per leaf up to which refineGraphFailures restricts them
+  /// where evaluation does not prove a graph test; beyond, a coarse leaf that evaluation
+  /// does not prove is refined at once.
+  static constexpr double kCheapLeafCoefficients = 4096;
   /// Blocks (2^n leaves certified together, each region looked up) are tried up to this n
   /// only, so that no step costs 2^n past it (4,096 regions in R^12).
   static constexpr int kMaxBlockDimension = 12;
@@ -209,6 +214,8 @@ class AdaptiveCrossing {
     std::int8_t wholeKnown = -1;
     bool wholeExcluded = false;
     std::vector<Interval<S>> whole;
+    /// By evaluation only (refineGraphFailures): no Bernstein hulls, and a failure not cached.
+    bool evaluationOnly = false;
   };
 
   /// solveFace's working storage, per thread (threadScratch): a face solved allocates little
@@ -343,13 +350,23 @@ class AdaptiveCrossing {
   /// Crossings, certificates and refinement until every leaf is certified or at the maximum
   /// level (or the leaf budget is spent). Returns the degenerate crossings of the last pass.
   std::int64_t refineAndCertify();
+  /// Refines `refine` (leaves of the tree): their children by the run's bounding test.
+  void refineLeaves(const std::vector<std::int32_t>& refine);
+  /// Refines the leaves within kEagerLevels of the base grid whose graph test fails, before
+  /// their faces are solved (refinement would follow their certificate's failure anyway).
+  void refineGraphFailures();
+  /// How many levels below the base grid refineGraphFailures reaches.
+  static constexpr int kEagerLevels = 3;
   /// Whether refinement will still try leaf c if it fails: refinement is on, c is above the
   /// maximum level and not next to crossings no refinement separates.
   bool refinable(std::int32_t c) const;
   /// Whether M is tangent to the plane of one of leaf c's unproven faces, or (a face graph
   /// failure) of one of its facets: tangentToFace (domain_boundary.hpp) on each. There no
   /// refinement proves the leaf, and it tries blocks at once (a heuristic: it proves nothing).
-  bool tangentToGridPlane(std::int32_t c) const;
+  /// faceMemo (one entry per unproven face, -1 before its probe) keeps the faces' answers.
+  bool tangentToGridPlane(std::int32_t c, std::vector<signed char>& faceMemo) const;
+  /// Whether M is tangent to the hyperplane of one of leaf c's facets (tangentToFace on each).
+  bool tangentToFacetPlane(std::int32_t c) const;
 
   // ---- chord_refinement.inl: --tolerance, the leaves whose mesh is beyond the chord error
   /// `--tolerance`: the leaves below the maximum level that are nodes of a mesh polygon inside
@@ -681,6 +698,10 @@ class AdaptiveCrossing {
   /// (kMaxLeafCoefficients); without them such a test fails (docs/performance.md, "Without
   /// dense forms").
   bool dense_ = true;
+  /// Whether the dense forms are at most kCheapLeafCoefficients per leaf, or the only way.
+  bool cheapForms_ = true;
+  /// Faces solved so far (prefetchFaces; TopologyRecord::facesSolved).
+  mutable std::atomic<std::int64_t> facesSolved_{0};
   RootForms noForms_;         ///< rootForms' answer without dense forms: no forms, zero margins
   std::vector<S> level_;      ///< c of the current attempt
   bool byEvaluation_ = true;  ///< faces and graph tests by evaluation first (no patch leaves)

@@ -69,6 +69,7 @@ AdaptiveCrossing<S>::AdaptiveCrossing(const ConnectionInput<S>& in, int maxFaceD
   double coefficients = 0;
   for (const Expression& e : in.system.equations()) coefficients += denseCoefficients(e);
   dense_ = !byEvaluation_ || coefficients <= kMaxLeafCoefficients;
+  cheapForms_ = !byEvaluation_ || coefficients <= kCheapLeafCoefficients;
   noForms_.margins.assign(std::size_t(m_), S(0));
   touchLeaves_.reset(grid_.depth, tree_.maxLevel());
   unprovenOfEmpty_.reset(grid_.depth, tree_.maxLevel());
@@ -78,11 +79,13 @@ AdaptiveCrossing<S>::AdaptiveCrossing(const ConnectionInput<S>& in, int maxFaceD
 template <class S>
 ConnectionOutput<S> AdaptiveCrossing<S>::run() {
   ConnectionOutput<S> out = attempts();
+  out.topology.facesSolved = facesSolved_;
   if (out.topology.certified || refined_ == 0) return out;
   const std::int64_t refinedDefects = nonmanifold(out.complex);
   const int reached = out.topology.maxLevel;
   refining_ = false;
   ConnectionOutput<S> base = attempts();
+  out.topology.facesSolved = base.topology.facesSolved = facesSolved_;
   const std::int64_t baseDefects = nonmanifold(base.complex);
   if (baseDefects >= refinedDefects) return out;
   base.topology.reason += "; refinement down to level " + std::to_string(reached) +

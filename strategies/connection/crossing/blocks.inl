@@ -15,10 +15,15 @@
 namespace ndc::crossing_detail {
 
 template <class S>
-bool AdaptiveCrossing<S>::tangentToGridPlane(std::int32_t c) const {
+bool AdaptiveCrossing<S>::tangentToGridPlane(std::int32_t c,
+                                             std::vector<signed char>& faceMemo) const {
   // Its unproven faces: M tangent to an m-face's plane gives two crossings there closer than
-  // any refinement separates.
+  // any refinement separates. An m-face is shared by 2^k leaves: probed once (faceMemo).
   for (const std::int32_t f : perLeaf_.unprovenOf[c]) {
+    if (faceMemo[f] >= 0) {
+      if (faceMemo[f]) return true;
+      continue;
+    }
     const FaceRef& face = unprovenFaces_[f];
     DomainStratum<S> stratum;
     stratum.box = cellBox(tree_.grid(face.level), domain_, face.corner);
@@ -30,14 +35,21 @@ bool AdaptiveCrossing<S>::tangentToGridPlane(std::int32_t c) const {
         stratum.free.push_back(j);
       }
     }
-    if (tangentToFace(in_.system, stratum)) return true;
+    faceMemo[f] = tangentToFace(in_.system, stratum) ? 1 : 0;
+    if (faceMemo[f]) return true;
   }
-  if (perLeaf_.failure[c] != Failure::kFaceGraph) return false;
-  // Its facets: M tangent to a facet's hyperplane (a sphere touching it, a circle of a torus
-  // lying in it) fails the face graph test at every level.
+  return perLeaf_.failure[c] == Failure::kFaceGraph && tangentToFacetPlane(c);
+}
+
+template <class S>
+bool AdaptiveCrossing<S>::tangentToFacetPlane(std::int32_t c) const {
+  // M tangent to a facet's hyperplane (a sphere touching it, a circle of a torus lying in it)
+  // fails the face graph test at every level. Only the facets M_c may meet (their graph test
+  // is the one that failed).
   const Box<S> box = leafBox(c);
   for (int a = 0; a < n_; ++a)
     for (int side = 0; side < 2; ++side) {
+      if (!facetMet(perLeaf_.facetsMet[c], a, side)) continue;
       DomainStratum<S> stratum{{a}, freeAxes(a), box};
       stratum.box.lo[a] = stratum.box.hi[a] = side ? box.hi[a] : box.lo[a];
       if (tangentToFace(in_.system, stratum)) return true;
@@ -65,10 +77,12 @@ void AdaptiveCrossing<S>::mergeBlocks(const Incidence& incident,
   // docs/certificate.md, "Blocks").
   std::vector<std::int32_t> trying;
   std::vector<const RootForms*> tryingForms;
+  std::vector<signed char> faceMemo(unprovenFaces_.size(), -1);
   for (std::size_t i = 0; i < leaves.size(); ++i) {
     const Failure f = perLeaf_.failure[leaves[i]];
     if (f == Failure::kNone || f == Failure::kGraph || f == Failure::kBoundary) continue;
-    if (!blocksEverywhere_ && refinable(leaves[i]) && !tangentToGridPlane(leaves[i])) continue;
+    if (!blocksEverywhere_ && refinable(leaves[i]) && !tangentToGridPlane(leaves[i], faceMemo))
+      continue;
     trying.push_back(leaves[i]);
     tryingForms.push_back(forms[i]);
   }

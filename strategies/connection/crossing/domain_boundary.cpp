@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include "framework/numeric/interval.hpp"
@@ -117,31 +118,52 @@ bool tangentToFace(const System<S>& system, const DomainStratum<S>& face) {
   const int n = system.n(), m = system.m(), free = static_cast<int>(face.free.size());
   std::vector<S> x(n);
   for (int j = 0; j < n; ++j) x[j] = (face.box.lo[j] + face.box.hi[j]) / 2;
-  // Gauss-Newton towards a point of M on the face's plane: least squares by the singular
-  // values, so that it goes on where the free columns lose rank (on a face of dimension
-  // below m too).
-  std::vector<S> f(m), jac(std::size_t(m) * n);
-  Matrix a(m, free);
-  Vector r(m);
+  // Gauss-Newton towards a point of M on the face's plane: the minimum-norm step of a pivoted
+  // QR where the free columns have full rank m, else least squares by the singular values, so
+  // that it goes on where they lose rank (on a face of dimension below m too). It stops once x
+  // is four face widths away: the test below wants it within one (a probe for cost, not a
+  // proof; docs/certificate.md, "Blocks").
+  std::optional<FaceNewtonWork<S>> freshNewton;
+  FaceNewtonWork<S>& w = threadScratch<S, FaceNewtonWork<S>>(freshNewton);
+  w.f.resize(m), w.jacobian.resize(std::size_t(m) * n);
+  w.free.resize(std::size_t(m) * free), w.step.resize(free);
+  const S threshold = S(8 * free) * ScalarTraits<S>::epsilon();
+  Matrix a;
+  Vector r;
   for (int it = 0; it < 40 && free > 0; ++it) {  // (a corner of D: nothing to move)
-    system.evaluate(std::span<const S>(x), f, jac);
-    if (!std::all_of(f.begin(), f.end(), isFinite<S>)) return false;
+    system.evaluate(std::span<const S>(x), w.f, w.jacobian);
+    if (!std::all_of(w.f.begin(), w.f.end(), isFinite<S>)) return false;
     for (int i = 0; i < m; ++i) {
-      r(i) = f[i];
-      for (int t = 0; t < free; ++t) a(i, t) = jac[std::size_t(i) * n + face.free[t]];
+      for (int t = 0; t < free; ++t)
+        w.free[std::size_t(i) * free + t] = w.jacobian[std::size_t(i) * n + face.free[t]];
     }
-    const Vector step = a.jacobiSvd(Eigen::ComputeThinU | Eigen::ComputeThinV).solve(r);
+    if (free >= m && w.solver.factor(w.free.data(), m, free, threshold)) {
+      w.solver.solve(w.f.data(), w.step.data());
+    } else {
+      a.resize(m, free), r.resize(m);
+      for (int i = 0; i < m; ++i) {
+        r(i) = w.f[i];
+        for (int t = 0; t < free; ++t) a(i, t) = w.free[std::size_t(i) * free + t];
+      }
+      const Vector step = a.jacobiSvd(Eigen::ComputeThinU | Eigen::ComputeThinV).solve(r);
+      for (int t = 0; t < free; ++t) w.step[t] = step(t);
+    }
     S size = 0;
+    bool away = false;
     for (int t = 0; t < free; ++t) {
-      x[face.free[t]] -= step(t);
-      size = std::max<S>(size, abs(step(t)));
+      const int j = face.free[t];
+      x[j] -= w.step[t];
+      size = std::max<S>(size, abs(w.step[t]));
+      const S width = face.box.hi[j] - face.box.lo[j];
+      away = away || !(x[j] >= face.box.lo[j] - 4 * width && x[j] <= face.box.hi[j] + 4 * width);
     }
+    if (away) return false;
     if (IterationGuard<S>::stagnated(size, normInf<S>(std::span<const S>(x)))) break;
   }
   // Within the face widened by its width, and on M.
   for (int j : face.free) {
-    const S w = face.box.hi[j] - face.box.lo[j];
-    if (!(x[j] >= face.box.lo[j] - w && x[j] <= face.box.hi[j] + w)) return false;
+    const S width = face.box.hi[j] - face.box.lo[j];
+    if (!(x[j] >= face.box.lo[j] - width && x[j] <= face.box.hi[j] + width)) return false;
   }
   std::optional<JacobianWork<S>> fresh;
   JacobianWork<S>& work = threadScratch<S, JacobianWork<S>>(fresh);

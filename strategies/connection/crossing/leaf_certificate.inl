@@ -67,6 +67,10 @@ bool AdaptiveCrossing<S>::cellGraph(std::int32_t leaf, const RootForms& rf, Leaf
     std::iota(all.begin(), all.end(), 0);
     perLeaf_.graph[leaf] = byEvaluation_ && leafJacobian(leaf, t) &&
                            t.test.graph(std::span<const Interval<S>>(t.whole), all);
+    if (!perLeaf_.graph[leaf] && t.evaluationOnly) {
+      perLeaf_.graph[leaf] = -1;
+      return false;
+    }
     if (!perLeaf_.graph[leaf] && dense_) {
       prepare(leaf, rf, t);
       perLeaf_.graph[leaf] = graphOf(t.patches, rf.margins, t.jacobian, t.test);
@@ -172,7 +176,7 @@ bool AdaptiveCrossing<S>::facesGraph(std::int32_t leaf, const RootForms& rf, Lea
         face.lo[a] = face.hi[a] = side == 1 ? box.hi[a] : box.lo[a];
         bool excluded = false;
         if (byEvaluation_ && evaluatedGraph(face, a, excluded, t)) continue;
-        if (!dense_) {
+        if (!dense_ || t.evaluationOnly) {
           failed = 2 * a + side;
           continue;
         }
@@ -181,6 +185,7 @@ bool AdaptiveCrossing<S>::facesGraph(std::int32_t leaf, const RootForms& rf, Lea
           failed = 2 * a + side;
       }
     }
+    if (failed >= 0 && t.evaluationOnly) return false;
     perLeaf_.faceGraph[leaf] = failed < 0;
     if (failed >= 0) faceTrouble(leaf, failed / 2, failed % 2 == 1);
   }

@@ -158,6 +158,7 @@ void AdaptiveCrossing<S>::prefetchFaces(PrefetchedLeaf& leaf) const {
       }
       return &pre[f.a];
     };
+    facesSolved_.fetch_add(1, std::memory_order_relaxed);
     FaceResult<S> r = solveFace(c, fixedAxes_[f.a], f.side, restricted, leaf.rf.margins,
                                 leaf.modelled ? &leaf.model : nullptr, preconditioner);
     if (!quiet(r)) out.visit.emplace_back(f, static_cast<std::int32_t>(out.faces.size()));
