@@ -6,6 +6,7 @@
 #include <malloc.h>
 #endif
 
+#include <cctype>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "experiments/cli/report.hpp"
 #include "experiments/cli/solve_options.hpp"
 #include "framework/problem/problem.hpp"
+#include "framework/util/errors.hpp"
 #include "pipeline/split.hpp"
 
 namespace {
@@ -23,6 +25,25 @@ namespace {
 using ndc::oneLine;
 using ndc::cli::kExitBadInput;
 using ndc::cli::kExitInternal;
+
+/// "unknown option '--depht' (did you mean '--depth'?)" for the first argument of the parsed
+/// subcommand that looks like an option and is none of its own; empty when there is none.
+std::string unknownOption(CLI::App& app) {
+  for (CLI::App* sub : app.get_subcommands()) {
+    std::vector<std::string> names;
+    for (const CLI::Option* option : sub->get_options()) {
+      for (const std::string& l : option->get_lnames()) names.push_back("--" + l);
+      for (const std::string& s : option->get_snames()) names.push_back("-" + s);
+    }
+    for (const std::string& arg : sub->remaining()) {
+      if (arg.size() < 2 || arg[0] != '-' || std::isdigit(static_cast<unsigned char>(arg[1])))
+        continue;  // a value, or a negative number
+      const std::string name = arg.substr(0, arg.find('='));
+      return "unknown option '" + name + "' for " + sub->get_name() + ndc::didYouMean(name, names);
+    }
+  }
+  return "";
+}
 
 int run(int argc, char** argv) {
   CLI::App app{"ndcontour: contouring 1- and 2-manifolds in arbitrary dimensions", "ndcontour"};
@@ -70,11 +91,16 @@ int run(int argc, char** argv) {
     if (e.get_exit_code() == 0) return app.exit(e);
     std::string message = e.what();
     const std::vector<std::string> extra = app.remaining();
+    const std::vector<std::string> commands = {"info",       "solve",  "bench",
+                                               "experiment", "report", "view"};
     if (app.get_subcommands().empty() && !extra.empty() && extra.front().starts_with("-"))
       message = "unknown option '" + extra.front() + "'";
     else if (app.get_subcommands().empty() && !extra.empty())
-      message = "unknown subcommand '" + extra.front() +
-                "' (accepted: info, solve, bench, experiment, report, view)";
+      message = "unknown subcommand '" + extra.front() + "'" +
+                ndc::didYouMean(extra.front(), commands) +
+                " (accepted: info, solve, bench, experiment, report, view)";
+    else if (const std::string unknown = unknownOption(app); !unknown.empty())
+      message = unknown;
     else if (app.get_subcommands().empty())
       message = "a subcommand is required (accepted: info, solve, bench, experiment, report, view)";
     std::cerr << "ndcontour: " << oneLine(message) << " (see ndcontour --help)\n";

@@ -20,23 +20,17 @@
 #include "pipeline/pipeline.hpp"
 
 namespace ndc::cli {
-namespace {}  // namespace
 
 void checkWritable(const std::filesystem::path& dir) {
-  std::error_code error;
-  std::filesystem::create_directories(dir, error);
-  if (error || !std::filesystem::is_directory(dir)) {
-    throw InputError(dir.string() + ": cannot create the output directory");
-  }
+  createDirectories(dir, "output directory");
   const auto probe = dir / (".ndcontour-probe" + std::to_string(::getpid()));
   std::ofstream(probe) << "";
   if (!std::filesystem::exists(probe)) {
-    throw InputError(dir.string() + ": the output directory is not writable");
+    throw InputError(dir.string() + ": the output directory is not writable: " + failureReason());
   }
-  std::filesystem::remove(probe, error);
+  std::error_code ignored;
+  std::filesystem::remove(probe, ignored);
 }
-
-namespace {}  // namespace
 
 Progress terminalProgress() {
   if (!::isatty(STDERR_FILENO)) return {};

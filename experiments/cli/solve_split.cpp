@@ -29,7 +29,8 @@ class TemporaryFolder {
     const char* base = std::getenv("TMPDIR");
     std::string pattern = std::string(base && *base ? base : "/tmp") + "/ndcontour-split-XXXXXX";
     if (!::mkdtemp(pattern.data()))
-      throw InputError(pattern + ": cannot create a temporary folder for the pieces");
+      throw InputError(pattern +
+                       ": cannot create a temporary folder for the pieces: " + failureReason());
     path_ = pattern;
   }
   ~TemporaryFolder() {

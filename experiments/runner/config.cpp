@@ -103,8 +103,9 @@ class ConfigReader {
         "seeds",      "timeout_s", "cells",       "quick"};
     for (auto&& [key, node] : top)
       if (!kTopKeys.count(std::string(key.str())))
-        fail(key.source(), "unknown key '" + std::string(key.str()) +
-                               "' (known: id, artefact, description, problems, bounding, "
+        fail(key.source(), "unknown key '" + std::string(key.str()) + "'" +
+                               didYouMean(key.str(), {kTopKeys.begin(), kTopKeys.end()}) +
+                               " (known: id, artefact, description, problems, bounding, "
                                "subdivision, connection, scalar, precision, classification, "
                                "projection, depths, seeds, timeout_s, cells, quick)");
 
@@ -140,8 +141,9 @@ class ConfigReader {
           "classification", "projection", "depths",      "seeds",      "timeout_s"};
       for (auto&& [key, node] : *table)
         if (!kQuickKeys.count(std::string(key.str())))
-          fail(key.source(), "unknown key 'quick." + std::string(key.str()) +
-                                 "' (known: problems, bounding, subdivision, connection, "
+          fail(key.source(), "unknown key 'quick." + std::string(key.str()) + "'" +
+                                 didYouMean(key.str(), {kQuickKeys.begin(), kQuickKeys.end()}) +
+                                 " (known: problems, bounding, subdivision, connection, "
                                  "scalar, precision, classification, projection, depths, seeds, "
                                  "timeout_s)");
       over = readGrid(*table, "quick.");
@@ -336,9 +338,9 @@ class ConfigReader {
       else if (k == "jitter")
         entry.jitter = seedsOf(node, "jitter");
       else
-        fail(key.source(), "unknown key '" + k +
-                               "' in a problem file entry (known: file, "
-                               "depths, jitter)");
+        fail(key.source(), "unknown key '" + k + "' in a problem file entry" +
+                               didYouMean(k, {"file", "depths", "jitter"}) +
+                               " (known: file, depths, jitter)");
     }
   }
 
@@ -371,9 +373,9 @@ class ConfigReader {
       } else if (k == "jitter") {
         entry.jitter = seedsOf(node, "jitter");
       } else {
-        fail(key.source(), "unknown key '" + k +
-                               "' in a generated problem entry (known: "
-                               "generator, n, seeds, depths, jitter)");
+        fail(key.source(), "unknown key '" + k + "' in a generated problem entry" +
+                               didYouMean(k, {"generator", "n", "seeds", "depths", "jitter"}) +
+                               " (known: generator, n, seeds, depths, jitter)");
       }
     }
     if (dimensions.empty()) fail(g, "a generated problem entry needs 'n'");

@@ -14,7 +14,7 @@ namespace ndc {
 
 std::string readText(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string() + ": cannot read the file");
+  if (!in) throw InputError(file.string() + ": cannot read the file: " + failureReason());
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();

@@ -95,9 +95,7 @@ namespace runner_detail {
 std::vector<std::string> prepareRun(const ExperimentConfig& config, const ExperimentRun& run,
                                     const fs::path& runDir, int jobs) {
   const ExperimentProblem& p = config.problems[run.problem];
-  std::error_code ec;
-  fs::create_directories(runDir, ec);
-  if (ec) throw InputError(runDir.string() + ": cannot create the run directory");
+  createDirectories(runDir, "run directory");
   // The command that repeats this run by hand, from the repository root.
   std::string command = "ndcontour";
   for (const std::string& a : solveArguments(p.file, runDir.string(), run.settings, config.cells)) {
@@ -450,10 +448,7 @@ int runExperiment(ExperimentConfig config, const ExperimentOptions& options) {
   const std::string started = utcNow();
   const fs::path dir = options.outDir / config.id;
   const fs::path runsDir = dir / "runs";
-  std::error_code ec;
-  fs::create_directories(runsDir, ec);
-  if (ec || !fs::is_directory(runsDir, ec))
-    throw InputError(runsDir.string() + ": cannot create the output directory");
+  createDirectories(runsDir, "output directory");
   writeGeneratedProblems(config, dir);
 
   const std::vector<ExperimentRun> runs = experimentGrid(config);

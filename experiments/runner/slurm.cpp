@@ -290,8 +290,7 @@ Submission prepareSubmission(const ExperimentConfig& config, const ExperimentOpt
   std::error_code ec;
   const fs::path slurmDir = fs::absolute(dir / "slurm", ec);
   fs::remove_all(slurmDir / "outcomes", ec);  // those of an earlier submission
-  fs::create_directories(slurmDir / "outcomes", ec);
-  if (ec) throw InputError(slurmDir.string() + ": cannot create the directory");
+  createDirectories(slurmDir / "outcomes", "directory");
   Submission s;
   // The absolute path of the executable (/proc/self/exe means this process's own).
   fs::path executable = fs::canonical(options.executable, ec);

@@ -93,8 +93,7 @@ std::vector<TaskOutcome> runTasks(
     std::error_code ec;
     job.executable = tasks.empty() ? fs::path() : fs::path(tasks.front().command.front());
     job.logDir = fs::absolute(executor.logDir, ec);
-    fs::create_directories(job.logDir, ec);
-    if (ec) throw InputError(job.logDir.string() + ": cannot create the directory");
+    createDirectories(job.logDir, "directory");
     job.workDir = fs::current_path(ec);
     job.jobs = std::max(1, executor.jobs);
     for (const SlurmTask& task : tasks) job.timeoutS = std::max(job.timeoutS, task.timeoutS);

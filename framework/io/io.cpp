@@ -30,6 +30,7 @@
 #include "framework/io/summary_schema.hpp"
 #include "framework/io/vertex_rows.hpp"
 #include "framework/problem/problem.hpp"
+#include "framework/util/errors.hpp"
 
 namespace ndc {
 namespace {
@@ -137,9 +138,10 @@ void writeAtomically(const std::filesystem::path& target, const std::string& tex
     out << text;
     out.flush();
     if (!out) {
+      const std::string reason = failureReason();  // before remove() sets errno
       std::error_code ignored;
       std::filesystem::remove(temporary, ignored);
-      throw InputError(target.string() + ": cannot write the file");
+      throw InputError(target.string() + ": cannot write the file: " + reason);
     }
   }
   std::error_code error;
@@ -588,7 +590,9 @@ class Staging {
     removeAbandoned(dir);
     std::filesystem::remove_all(path_, error);
     std::filesystem::create_directory(path_, error);
-    if (error) throw InputError(dir.string() + ": cannot create a temporary folder in it");
+    if (error)
+      throw InputError(dir.string() +
+                       ": cannot create a temporary folder in it: " + error.message());
     copyPath(cleanup.folder, path_);
   }
 
@@ -618,7 +622,7 @@ class Staging {
       std::ofstream out(path_ / name, std::ios::binary);
       out.write(text.data(), static_cast<std::streamsize>(text.size()));
       out.flush();
-      if (!out) abandon((dir_ / name).string() + ": cannot write the file (disk full?)");
+      if (!out) abandon((dir_ / name).string() + ": cannot write the file: " + failureReason());
     }
   }
 
@@ -677,11 +681,7 @@ std::vector<std::string> Staging::publish(const OutputFiles& files) const {
 
 std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const RunResult& result,
                                       const OutputOptions& options) {
-  std::error_code error;
-  std::filesystem::create_directories(dir, error);
-  if (error || !std::filesystem::is_directory(dir)) {
-    throw InputError(dir.string() + ": cannot create the output directory");
-  }
+  createDirectories(dir, "output directory");
   const OutputFiles files = formatOutputs(result, options);
   // Stage: every file into a hidden folder inside `dir` first, so that a full disk or an
   // interrupt while writing leaves the previous run untouched (an interrupt removes the

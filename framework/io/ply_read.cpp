@@ -488,7 +488,7 @@ void readBody(Records& in, const PlyHeader& h, PlyMesh& mesh, const PlyError& fa
 PlyMesh readPly(const std::filesystem::path& file) {
   const PlyError fail{file.string()};
   std::ifstream stream(file, std::ios::binary);
-  if (!stream) fail("cannot read the file");
+  if (!stream) fail("cannot read the file: " + failureReason());
   std::ostringstream buffer;
   buffer << stream.rdbuf();
   const std::string text = std::move(buffer).str();

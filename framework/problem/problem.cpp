@@ -18,6 +18,7 @@
 #include "framework/numeric/tape.hpp"
 #include "framework/problem/expectation.hpp"
 #include "framework/problem/toml_reader.hpp"
+#include "framework/util/errors.hpp"
 
 namespace ndc {
 
@@ -114,8 +115,9 @@ class Validator : public TomlReader {
                                                  "domain", "equations",   "expect"};
     for (auto&& [key, node] : root)
       if (!kKnown.count(std::string(key.str())))
-        fail(key.source(), "unknown key '" + std::string(key.str()) +
-                               "' (known: name, description, variables, domain, equations, "
+        fail(key.source(), "unknown key '" + std::string(key.str()) + "'" +
+                               didYouMean(key.str(), {kKnown.begin(), kKnown.end()}) +
+                               " (known: name, description, variables, domain, equations, "
                                "expect)");
 
     // name: required, [a-z0-9._-]+ so that it can name files and result ids.
@@ -325,8 +327,9 @@ void TomlReader::onlyKeys(const toml::table& table, std::initializer_list<const 
     if (ok) continue;
     std::string list;
     for (const char* k : known) list += (list.empty() ? "" : ", ") + std::string(k);
-    fail(key.source(),
-         "unknown key '" + std::string(key.str()) + "' in " + what + " (known: " + list + ")");
+    fail(key.source(), "unknown key '" + std::string(key.str()) + "' in " + what +
+                           didYouMean(key.str(), {known.begin(), known.end()}) +
+                           " (known: " + list + ")");
   }
 }
 
@@ -349,7 +352,9 @@ Expectation TomlReader::expectOf(const toml::node& node) const {
       std::string known;
       for (std::string_view name : kExpectKeys)
         known += (known.empty() ? "" : ", ") + std::string(name);
-      fail(key.source(), "unknown key '" + k + "' in expect (known: " + known + ")");
+      fail(key.source(), "unknown key '" + k + "' in expect" +
+                             didYouMean(k, {kExpectKeys.begin(), kExpectKeys.end()}) +
+                             " (known: " + known + ")");
     }
     const auto* i = value.as_integer();
     if (!i) fail(value, "expect." + k + " must be an integer, not " + tomlTypeName(value));

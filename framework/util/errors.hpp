@@ -4,8 +4,12 @@
 /// exception that reaches the CLI is an internal error (status 1), which is a bug.
 #pragma once
 
+#include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <string_view>
+#include <system_error>
+#include <vector>
 
 namespace ndc {
 
@@ -47,5 +51,17 @@ class UsageError : public InputError {
 
 /// `text` with every line break replaced by a space, so that a message stays on one line.
 std::string oneLine(std::string text);
+
+/// Why a file operation failed, for the end of a message: `error`'s text, or (no error code)
+/// the C library's for errno, e.g. "Permission denied".
+std::string failureReason(const std::error_code& error = {});
+
+/// Creates `dir` and its missing parents, or throws InputError `DIR: cannot create the WHAT:
+/// REASON` (the system's reason, or that a file of that name is in the way).
+void createDirectories(const std::filesystem::path& dir, std::string_view what);
+
+/// " (did you mean 'NAME'?)" for the name in `known` nearest to `word` (edit distance at most
+/// a third of its length, and at least 1; a name that starts with `word` counts too), else "".
+std::string didYouMean(std::string_view word, const std::vector<std::string>& known);
 
 }  // namespace ndc

@@ -314,5 +314,6 @@ TEST_CASE("ply: truncated, garbled and absurd files are one-line errors", "[ply]
   refused("ascii-absurd.ply", replaced(a, "element edge 2", "element edge 2000"),
           "element 'edge' declares 2000 records");
   CHECK(readError(scratch() / "no-such-file.ply") ==
-        (scratch() / "no-such-file.ply").string() + ": cannot read the file");
+        (scratch() / "no-such-file.ply").string() +
+            ": cannot read the file: No such file or directory");
 }
