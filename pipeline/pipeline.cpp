@@ -708,15 +708,20 @@ RunResult run(const Problem& problem, const Settings& settings, const StrategyCh
     return refineCell<S>(problem, settings, subdivision, cell);
   };
   input.coefficientError = coefficientErrors(rounding);
+  input.progress = progress;
+  if (progress) progress("connection", 0);
   ConnectionOutput<S> connected = connect<S>(connection, input);
+  if (progress) progress("connection", 1);
   summary.tConnection = secondsSince(t);
   recordTopology<S>(summary, connected, connectionRegistry().find(choices.connection.name).spec,
                     settings.depth);
 
   // Analysis on the welded mesh.
   t = Clock::now();
+  if (progress) progress("analysis", 0);
   summary.singularPoints =
       findSingularPoints<S>(problem, system, projection, cells, projections, domain).points;
+  if (progress) progress("analysis", 0.25);
   const Complex<S> welded =
       weldAtSingularPoints<S>(connected.complex, summary.singularPoints, grid);
   // The orientation of the output's simplices beside the analysis, which reads neither them
@@ -730,6 +735,7 @@ RunResult run(const Problem& problem, const Settings& settings, const StrategyCh
   orientation.wait();
   summary.mesh.orientable = orientable;
   summary.tAnalysis = secondsSince(t);
+  if (progress) progress("analysis", 1);
   checkCertificate(summary);
 
   writeBack<S>(result, welded, cells, grid, domain, projections, classes);

@@ -40,8 +40,10 @@ int runSplitSolve(const SolveOptions& options, const Problem& problem);
 /// Fails early (before minutes of work) if `dir` cannot receive the outputs: InputError.
 void checkWritable(const std::filesystem::path& dir);
 
-/// A one-line progress bar on standard error, only when it is a terminal.
-Progress terminalProgress();
+/// A one-line progress bar on standard error, only when it is a terminal and not `quiet`
+/// (`--json`): the stage (with its counts, e.g. the connection's round and leaves), a bar and
+/// the percentage, redrawn at most ten times a second and ended by a line break at 100 %.
+Progress terminalProgress(bool quiet = false);
 
 /// Options of `ndcontour bench`.
 struct BenchOptions {

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -32,12 +33,24 @@ void checkWritable(const std::filesystem::path& dir) {
   std::filesystem::remove(probe, ignored);
 }
 
-Progress terminalProgress() {
-  if (!::isatty(STDERR_FILENO)) return {};
-  return [](const char* stage, double fraction) {
+Progress terminalProgress(bool quiet) {
+  if (quiet || !::isatty(STDERR_FILENO)) return {};
+  using Clock = std::chrono::steady_clock;
+  return [last = Clock::time_point(), shown = std::string(), ended = false](
+             const char* stage, double fraction) mutable {
+    // Redrawn when the stage changes, at its end (once), or a tenth of a second after the last
+    // time.
+    const auto now = Clock::now();
+    if (stage == shown &&
+        (ended || (fraction < 1.0 && now - last < std::chrono::milliseconds(100))))
+      return;
+    last = now, shown = stage, ended = fraction >= 1.0;
+    fraction = std::clamp(fraction, 0.0, 1.0);
     const int width = 30, filled = static_cast<int>(fraction * width + 0.5);
-    std::fprintf(stderr, "\r%-12s [%.*s%*s] %3d%%", stage, filled, "##############################",
-                 width - filled, "", static_cast<int>(fraction * 100 + 0.5));
+    // \033[K clears what a longer stage text left on the line.
+    std::fprintf(stderr, "\r%-12s [%.*s%*s] %3d%%\033[K", stage, filled,
+                 "##############################", width - filled, "",
+                 static_cast<int>(fraction * 100 + 0.5));
     if (fraction >= 1.0) std::fputs("\n", stderr);
     std::fflush(stderr);
   };
@@ -142,13 +155,13 @@ void printDiagnostics(const Summary& s) {
 
 /// The pipeline, with running out of memory (the estimate was low, or the address-space limit
 /// was reached) reported as bad input that names the budget.
-RunResult solveWithin(const Problem& problem, const Settings& settings) {
+RunResult solveWithin(const Problem& problem, const Settings& settings, bool quiet) {
   try {
     // A long run says so before its work (a progress bar may be on the line: start anew).
     const Notice notice = [](const std::string& line) {
       std::cerr << (::isatty(STDERR_FILENO) ? "\n" : "") << line << std::endl;
     };
-    return runPipeline(problem, settings, terminalProgress(), notice);
+    return runPipeline(problem, settings, terminalProgress(quiet), notice);
   } catch (const std::bad_alloc&) {
     const double budget = static_cast<double>(settings.maxMemoryBytes ? settings.maxMemoryBytes
                                                                       : defaultMemoryBudget());
@@ -180,7 +193,7 @@ int runSolve(SolveOptions options, const Problem& problem) {
   if (options.outDir) checkWritable(*options.outDir);
   installInterruptCleanup();
   armBudgets(options, problem);
-  RunResult result = solveWithin(problem, options.settings);
+  RunResult result = solveWithin(problem, options.settings, options.json);
   if (!options.outDir) disarmTimeout();
   return reportSolve(options, problem, result);
 }

@@ -97,6 +97,10 @@ struct ConnectionInput {
   /// Per equation: a bound on the rounding error of its Bernstein coefficients on the domain,
   /// relative to the largest (certificates treat smaller coefficients as unknown signs).
   std::vector<double> coefficientError;
+  /// Progress within the connection (may be empty): the crossing connection reports each
+  /// round of refinement as the stage "connection" with its round and leaves, and the share of
+  /// the round's leaves walked.
+  Progress progress;
 };
 
 /// What a connection strategy returns.

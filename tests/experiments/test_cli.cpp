@@ -220,6 +220,52 @@ TEST_CASE("cli: unreadable problem files exit 2 with one line", "[cli]") {
                 {scratch().string(), "is a directory"});
 }
 
+/// `ndcontour ARGS` on a terminal (a pseudo-terminal of `script`, util-linux): what it wrote
+/// to the terminal, stdout and stderr together.
+std::string onTerminal(const std::string& args) {
+  const fs::path log = scratch() / "terminal.txt";
+  const std::string inner = quoted(ndc::test::binaryPath()) + " " + args;
+  const std::string command =
+      "script -qec " + quoted(inner) + " /dev/null >" + quoted(log.string()) + " 2>&1 </dev/null";
+  CHECK(std::system(command.c_str()) == 0);
+  return slurp(log);
+}
+
+TEST_CASE("cli: progress covers every stage on a terminal, and is silent with --json", "[cli]") {
+  if (std::system("command -v script >/dev/null 2>&1") != 0) {
+    WARN("no `script` (util-linux): the terminal is not tested");
+    return;
+  }
+  // A 2-sphere in R^4 at depth 3, which refinement certifies: every stage has work to show.
+  const fs::path sphere =
+      fs::path(ndc::test::sourceDir()) / "experiments" / "problems" / "sphere-r4.toml";
+  const std::string shown = onTerminal("solve " + quoted(sphere.string()) + " --depth 3");
+  INFO("terminal: " << shown);
+  for (const char* stage : {"subdivision", "projection", "connection", "analysis"}) {
+    CHECK(contains(shown, std::string(stage)));
+    // Each stage ends at 100 % exactly once, with a line break.
+    std::size_t at = 0, ended = 0;
+    const std::string end = "] 100%";
+    while ((at = shown.find(end, at)) != std::string::npos) {
+      const std::size_t line = shown.rfind('\r', at);
+      ended += shown.compare(line + 1, std::string(stage).size(), stage) == 0;
+      at += end.size();
+    }
+    CHECK(ended == 1);
+  }
+  CHECK(contains(shown, "connection, round 1: "));
+  CHECK(contains(shown, "mesh: "));  // the report follows on a line of its own
+  // --json: the JSON alone, no bar.
+  const std::string json = onTerminal("solve " + quoted(sphere.string()) + " --depth 3 --json");
+  CHECK(!contains(json, "[#"));
+  CHECK(!contains(json, "100%"));
+  CHECK(contains(json, "\"topology\""));
+  // Not a terminal: nothing but the report.
+  const Run piped = ndcontour("solve " + quoted(sphere.string()) + " --depth 3");
+  CHECK(piped.status == 0);
+  CHECK(piped.err.empty());
+}
+
 TEST_CASE("cli: usage errors exit 2 with one line", "[cli]") {
   const std::string valid = quoted(writeProblem("valid.toml", kValid).string());
   checkBadInput(ndcontour(""), {"subcommand is required"});

@@ -26,6 +26,7 @@
 #include <atomic>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -700,6 +701,11 @@ class AdaptiveCrossing {
   bool dense_ = true;
   /// Whether the dense forms are at most kCheapLeafCoefficients per leaf, or the only way.
   bool cheapForms_ = true;
+  /// The progress stage of the round (refineAndCertify): its number, leaves and refined leaves.
+  std::string progressLabel_ = "connection";
+  std::size_t progressLeaves_ = 0;  ///< the leaves when the round started
+  /// Reports the round's progress (in_.progress): `walked` of its leaves walked.
+  void reportProgress(std::int32_t walked);
   /// Faces solved so far (prefetchFaces; TopologyRecord::facesSolved).
   mutable std::atomic<std::int64_t> facesSolved_{0};
   RootForms noForms_;         ///< rootForms' answer without dense forms: no forms, zero margins

@@ -32,6 +32,7 @@ std::int64_t AdaptiveCrossing<S>::crossFaces() {
     if (now->from == now->end) return degenerate;  // every leaf walked and its faces kept
     startWindow(beside, now->end, *next, now);
     degenerate += walkWindow(*now);
+    reportProgress(now->end);
     finishWindow(beside);
     std::swap(now, next);
     // An empty next window: the tree ended there when it started (touch leaves may follow).
@@ -222,6 +223,15 @@ void AdaptiveCrossing<S>::faceTrouble(std::int32_t leaf, int a, bool upper) {
   for (int j = 0; j < n_; ++j) centre[j] = (box.lo[j] + box.hi[j]) / 2;
   centre[a] = upper ? box.hi[a] : box.lo[a];
   setTrouble(leaf, centre);
+}
+
+template <class S>
+void AdaptiveCrossing<S>::reportProgress(std::int32_t walked) {
+  if (!in_.progress) return;
+  // The share of the leaves the round started with (touch leaves join on the way), below 100 %
+  // (the pipeline ends the stage).
+  const double leaves = static_cast<double>(std::max<std::size_t>(progressLeaves_, 1));
+  in_.progress(progressLabel_.c_str(), std::min(0.99, static_cast<double>(walked) / leaves));
 }
 
 template <class S>

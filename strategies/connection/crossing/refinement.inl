@@ -44,8 +44,14 @@ std::int64_t AdaptiveCrossing<S>::refineAndCertify() {
   solutionChildren_ = 0;
   budgetSpent_ = false;
   refineGraphFailures();
-  while (true) {
+  for (int round = 1;; ++round) {
     perLeaf_.clearFaceFlags();
+    if (in_.progress) {
+      progressLeaves_ = tree_.size();
+      progressLabel_ = "connection, round " + std::to_string(round) + ": " +
+                       std::to_string(tree_.size()) + " leaves, " + std::to_string(refined_) +
+                       " refined";
+    }
     const std::int64_t degenerate = crossFaces();
     grow();
     certify();
