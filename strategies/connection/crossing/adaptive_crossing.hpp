@@ -356,6 +356,10 @@ class AdaptiveCrossing {
   /// Refines the leaves within kEagerLevels of the base grid whose graph test fails, before
   /// their faces are solved (refinement would follow their certificate's failure anyway).
   void refineGraphFailures();
+  /// Whether leaf c fails refineGraphFailures's tests: not proven empty by intervals, and its
+  /// graph test, or for k = 2 a face graph test where M is not tangent to the facet's plane,
+  /// fails (by evaluation only unless cheapForms_).
+  bool failsGraphTests(std::int32_t c, const RootForms& rf);
   /// How many levels below the base grid refineGraphFailures reaches.
   static constexpr int kEagerLevels = 3;
   /// Whether refinement will still try leaf c if it fails: refinement is on, c is above the

@@ -97,6 +97,28 @@ void AdaptiveCrossing<S>::refineLeaves(const std::vector<std::int32_t>& refine) 
 }
 
 template <class S>
+bool AdaptiveCrossing<S>::failsGraphTests(std::int32_t c, const RootForms& rf) {
+  std::vector<Bernstein<S>> own;
+  LeafTests t{leafScratch(own), {}, graphTest_, false, -1, false, {}, !cheapForms_};
+  if (intervalEmpty(leafBox(c), true)) return false;
+  if (!cellGraph(c, rf, t)) return true;
+  if (k_ != 2) return false;
+  // The face graph test (k = 2) on the facets the leaf model shows M_c may meet, as the
+  // certificate's (prefetchFacets keeps the mask).
+  if (m_ > 1 && byEvaluation_) {
+    LeafModel<S> model;
+    buildLeafModel(threadEvaluators(in_.system), leafBox(c), std::span<const S>(level_), model);
+    thread_local std::vector<char> met;
+    std::optional<LinearizedSystem<S>> fresh;
+    facetsOfModel(model, threadScratch<S, LinearizedSystem<S>>(fresh), met);
+    perLeaf_.facetsMet[c] = facetMask(met);
+  }
+  // Where M is tangent to a facet's plane the face graph test fails at every level: there the
+  // certificate tries blocks (docs/certificate.md, "Blocks"), not refinement.
+  return !facesGraph(c, rf, t) && !tangentToFacetPlane(c);
+}
+
+template <class S>
 void AdaptiveCrossing<S>::refineGraphFailures() {
   // Coarse leaves whose graph test fails are refined before their faces are solved: the
   // certificate would refine them anyway, and a coarse leaf's faces are the dearest to solve
@@ -114,39 +136,14 @@ void AdaptiveCrossing<S>::refineGraphFailures() {
     if (leaves.empty()) return;
     const std::vector<const RootForms*> forms = rootFormsOf(leaves);
     std::vector<char> fails(leaves.size(), 0);
-    parallelFor(leaves.size(), [&](std::size_t i) {
-      const std::int32_t c = leaves[i];
-      std::vector<Bernstein<S>> own;
-      LeafTests t{leafScratch(own), {}, graphTest_, false, -1, false, {}, !cheapForms_};
-      if (intervalEmpty(leafBox(c), true)) return;
-      if (!cellGraph(c, *forms[i], t)) {
-        fails[i] = 1;
-        return;
-      }
-      // The face graph test (k = 2) on the facets the leaf model shows M_c may meet, as the
-      // certificate's (prefetchFacets keeps the mask).
-      if (k_ != 2) return;
-      if (m_ > 1 && byEvaluation_) {
-        LeafModel<S> model;
-        buildLeafModel(threadEvaluators(in_.system), leafBox(c), std::span<const S>(level_), model);
-        thread_local std::vector<char> met;
-        std::optional<LinearizedSystem<S>> fresh;
-        facetsOfModel(model, threadScratch<S, LinearizedSystem<S>>(fresh), met);
-        perLeaf_.facetsMet[c] = facetMask(met);
-      }
-      // Where M is tangent to a facet's plane the face graph test fails at every level: there
-      // the certificate tries blocks (docs/certificate.md, "Blocks"), not refinement.
-      fails[i] = !facesGraph(c, *forms[i], t) && !tangentToFacetPlane(c);
-    });
+    parallelFor(leaves.size(),
+                [&](std::size_t i) { fails[i] = failsGraphTests(leaves[i], *forms[i]) ? 1 : 0; });
     std::vector<std::int32_t> refine;
     for (std::size_t i = 0; i < leaves.size(); ++i) {
       if (fails[i]) refine.push_back(leaves[i]);
     }
-    if (!refine.empty() && withinBudget(refine.size())) {
-      refineLeaves(refine);
-      continue;
-    }
-    return;
+    if (refine.empty() || !withinBudget(refine.size())) return;
+    refineLeaves(refine);
   }
 }
 
