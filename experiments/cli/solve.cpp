@@ -25,10 +25,9 @@ namespace ndc::cli {
 void checkWritable(const std::filesystem::path& dir) {
   createDirectories(dir, "output directory");
   const auto probe = dir / (".ndcontour-probe" + std::to_string(::getpid()));
-  std::ofstream(probe) << "";
-  if (!std::filesystem::exists(probe)) {
+  // The reason read at once: a later call may set errno again.
+  if (!std::ofstream(probe))
     throw InputError(dir.string() + ": the output directory is not writable: " + failureReason());
-  }
   std::error_code ignored;
   std::filesystem::remove(probe, ignored);
 }

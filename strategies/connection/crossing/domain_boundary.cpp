@@ -78,68 +78,37 @@ struct FaceNewtonWork {
   MinimumNormSolver<S> solver;
 };
 
+/// Gauss-Newton on the free coordinates of x towards M: each step the minimum-norm step of a
+/// pivoted QR of J's free columns or, with `leastSquares`, least squares by the singular values
+/// where the QR declines (their rank below m, or fewer than m of them). False when F is not
+/// finite, the QR declines without `leastSquares`, or x leaves `near` (when given) by four of
+/// its widths.
 template <class S>
-bool faceNewton(const System<S>& system, std::span<S> x, const std::vector<int>& freeAxes) {
+bool freeNewton(const System<S>& system, std::span<S> x, const std::vector<int>& freeAxes,
+                bool leastSquares, const Box<S>* near) {
   using std::abs;
+  using Matrix = typename JacobianWork<S>::Matrix;
+  using Vector = typename JacobianWork<S>::Vector;
   constexpr int kIterations = 40;  // as the run's projection
   std::optional<FaceNewtonWork<S>> fresh;
   FaceNewtonWork<S>& w = threadScratch<S, FaceNewtonWork<S>>(fresh);
   const int n = system.n(), m = system.m(), free = static_cast<int>(freeAxes.size());
-  if (free < m) return false;
-  w.f.resize(m), w.jacobian.resize(std::size_t(m) * n);
-  w.free.resize(std::size_t(m) * free), w.step.resize(free);
-  const S threshold = S(8 * free) * ScalarTraits<S>::epsilon();
-  for (int it = 0; it < kIterations; ++it) {
-    system.evaluate(std::span<const S>(x.data(), x.size()), w.f, w.jacobian);
-    if (!std::all_of(w.f.begin(), w.f.end(), isFinite<S>)) return false;
-    // The step moves the free coordinates only: J's columns of the free axes.
-    for (int r = 0; r < m; ++r) {
-      for (int t = 0; t < free; ++t)
-        w.free[std::size_t(r) * free + t] = w.jacobian[std::size_t(r) * n + freeAxes[t]];
-    }
-    if (!w.solver.factor(w.free.data(), m, free, threshold)) return false;
-    w.solver.solve(w.f.data(), w.step.data());
-    S stepNorm = 0;
-    for (int t = 0; t < free; ++t) {
-      x[freeAxes[t]] -= w.step[t];
-      stepNorm = std::max<S>(stepNorm, abs(w.step[t]));
-    }
-    if (IterationGuard<S>::stagnated(stepNorm, normInf<S>(std::span<const S>(x.data(), x.size()))))
-      return true;
-  }
-  return true;
-}
-
-template <class S>
-bool tangentToFace(const System<S>& system, const DomainStratum<S>& face) {
-  using std::abs;
-  using Matrix = typename JacobianWork<S>::Matrix;
-  using Vector = typename JacobianWork<S>::Vector;
-  const int n = system.n(), m = system.m(), free = static_cast<int>(face.free.size());
-  std::vector<S> x(n);
-  for (int j = 0; j < n; ++j) x[j] = (face.box.lo[j] + face.box.hi[j]) / 2;
-  // Gauss-Newton towards a point of M on the face's plane: the minimum-norm step of a pivoted
-  // QR where the free columns have full rank m, else least squares by the singular values, so
-  // that it goes on where they lose rank (on a face of dimension below m too). It stops once x
-  // is four face widths away: the test below wants it within one (a probe for cost, not a
-  // proof; docs/certificate.md, "Blocks").
-  std::optional<FaceNewtonWork<S>> freshNewton;
-  FaceNewtonWork<S>& w = threadScratch<S, FaceNewtonWork<S>>(freshNewton);
   w.f.resize(m), w.jacobian.resize(std::size_t(m) * n);
   w.free.resize(std::size_t(m) * free), w.step.resize(free);
   const S threshold = S(8 * free) * ScalarTraits<S>::epsilon();
   Matrix a;
   Vector r;
-  for (int it = 0; it < 40 && free > 0; ++it) {  // (a corner of D: nothing to move)
-    system.evaluate(std::span<const S>(x), w.f, w.jacobian);
+  for (int it = 0; it < kIterations; ++it) {
+    system.evaluate(std::span<const S>(x.data(), x.size()), w.f, w.jacobian);
     if (!std::all_of(w.f.begin(), w.f.end(), isFinite<S>)) return false;
+    // The step moves the free coordinates only: J's columns of the free axes.
     for (int i = 0; i < m; ++i) {
       for (int t = 0; t < free; ++t)
-        w.free[std::size_t(i) * free + t] = w.jacobian[std::size_t(i) * n + face.free[t]];
+        w.free[std::size_t(i) * free + t] = w.jacobian[std::size_t(i) * n + freeAxes[t]];
     }
     if (free >= m && w.solver.factor(w.free.data(), m, free, threshold)) {
       w.solver.solve(w.f.data(), w.step.data());
-    } else {
+    } else if (leastSquares) {
       a.resize(m, free), r.resize(m);
       for (int i = 0; i < m; ++i) {
         r(i) = w.f[i];
@@ -147,19 +116,46 @@ bool tangentToFace(const System<S>& system, const DomainStratum<S>& face) {
       }
       const Vector step = a.jacobiSvd(Eigen::ComputeThinU | Eigen::ComputeThinV).solve(r);
       for (int t = 0; t < free; ++t) w.step[t] = step(t);
+    } else {
+      return false;
     }
     S size = 0;
     bool away = false;
     for (int t = 0; t < free; ++t) {
-      const int j = face.free[t];
+      const int j = freeAxes[t];
       x[j] -= w.step[t];
       size = std::max<S>(size, abs(w.step[t]));
-      const S width = face.box.hi[j] - face.box.lo[j];
-      away = away || !(x[j] >= face.box.lo[j] - 4 * width && x[j] <= face.box.hi[j] + 4 * width);
+      if (near) {
+        const S width = near->hi[j] - near->lo[j];
+        away = away || !(x[j] >= near->lo[j] - 4 * width && x[j] <= near->hi[j] + 4 * width);
+      }
     }
     if (away) return false;
-    if (IterationGuard<S>::stagnated(size, normInf<S>(std::span<const S>(x)))) break;
+    if (IterationGuard<S>::stagnated(size, normInf<S>(std::span<const S>(x.data(), x.size()))))
+      return true;
   }
+  return true;
+}
+
+template <class S>
+bool faceNewton(const System<S>& system, std::span<S> x, const std::vector<int>& freeAxes) {
+  if (static_cast<int>(freeAxes.size()) < system.m()) return false;
+  return freeNewton(system, x, freeAxes, false, static_cast<const Box<S>*>(nullptr));
+}
+
+template <class S>
+bool tangentToFace(const System<S>& system, const DomainStratum<S>& face) {
+  using std::abs;
+  using Matrix = typename JacobianWork<S>::Matrix;
+  const int n = system.n(), m = system.m(), free = static_cast<int>(face.free.size());
+  std::vector<S> x(n);
+  for (int j = 0; j < n; ++j) x[j] = (face.box.lo[j] + face.box.hi[j]) / 2;
+  // Gauss-Newton towards a point of M on the face's plane, going on where the free columns
+  // lose rank (on a face of dimension below m too), and given up once x is four face widths
+  // away: the test below wants it within one (a probe for cost, not a proof; docs/
+  // certificate.md, "Blocks"). A corner of D has nothing to move.
+  if (!face.free.empty() && !freeNewton(system, std::span<S>(x), face.free, true, &face.box))
+    return false;
   // Within the face widened by its width, and on M.
   for (int j : face.free) {
     const S width = face.box.hi[j] - face.box.lo[j];

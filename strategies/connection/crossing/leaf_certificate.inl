@@ -65,13 +65,12 @@ bool AdaptiveCrossing<S>::cellGraph(std::int32_t leaf, const RootForms& rf, Leaf
     thread_local std::vector<int> all;
     all.resize(n_);
     std::iota(all.begin(), all.end(), 0);
-    perLeaf_.graph[leaf] = byEvaluation_ && leafJacobian(leaf, t) &&
+    const bool evaluated = byEvaluation_ && leafJacobian(leaf, t) &&
                            t.test.graph(std::span<const Interval<S>>(t.whole), all);
-    if (!perLeaf_.graph[leaf] && t.evaluationOnly) {
-      perLeaf_.graph[leaf] = -1;
-      return false;
-    }
-    if (!perLeaf_.graph[leaf] && dense_) {
+    // Evaluation only: a failure is not the test's answer (the hulls may prove it): not kept.
+    if (!evaluated && t.evaluationOnly) return false;
+    perLeaf_.graph[leaf] = evaluated;
+    if (!evaluated && dense_) {
       prepare(leaf, rf, t);
       perLeaf_.graph[leaf] = graphOf(t.patches, rf.margins, t.jacobian, t.test);
     }
