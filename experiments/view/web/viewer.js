@@ -1,6 +1,6 @@
 // The page of `ndcontour view` (docs/viewer.md): reads the mesh and summary.json that the tool
 // embedded, projects R^d to 3-D with an orthogonal matrix R (three rows of R p are shown), draws
-// with three.js, and publishes what it drew as window.ndcView for tests.
+// with three.js and an axis triad of R^d, and publishes what it drew as window.ndcView for tests.
 (function () {
   'use strict';
   const $ = (id) => document.getElementById(id);
@@ -25,6 +25,22 @@
   const data = JSON.parse($('ndc-mesh').textContent);
   const V = data.vertices, k = data.k, names = data.coordinates.slice();
   const first = names.length - data.n;  // of u0: 3 when x y z come first, else 0
+  // The problem's variable names (summary.json `variables`) for u0 .. u{n-1}, where given.
+  const variables = summary.variables;
+  if (Array.isArray(variables) && variables.length === data.n &&
+      variables.every((v) => typeof v === 'string' && v.length > 0)) {
+    variables.forEach((v, j) => { names[first + j] = v; });
+    // An application's 3-D image x y z beside variables of the same names: say which is which.
+    if (first === 3 && variables.some((v) => ['x', 'y', 'z'].includes(v)))
+      for (let m = 0; m < 3; ++m) names[m] += ' (image)';
+  }
+  const axes = names.length;  // the coordinate axes of the page's R^d (before any padding)
+  const emptyZeroSet = !!(summary.diagnostics || {}).empty_zero_set;
+  // Settings in the page's address after '#', e.g. view.html#colour=component&map=rainbow.
+  const params = new Map(location.hash.slice(1).split('&').filter(Boolean).map((p) => {
+    const at = p.indexOf('=');
+    return at < 0 ? [decodeURIComponent(p), ''] : [decodeURIComponent(p.slice(0, at)), decodeURIComponent(p.slice(at + 1))];
+  }));
   let raw = decode(data.positions, Float32Array);
   if (names.length < 3) {  // a curve in R^2: a third coordinate 0
     const wide = new Float32Array(V * 3);
@@ -35,6 +51,29 @@
   const d = names.length;
   const indices = decode(data.indices, Uint32Array);
   const uncertified = decode(data.uncertified, Uint8Array);
+
+  // --- Connected components: union-find over the simplices' vertices (an isolated vertex is a
+  // component of its own, as mesh.components of summary.json counts them) ------------------
+  const parent = Int32Array.from({ length: V }, (_, v) => v);
+  function root(v) {
+    while (parent[v] !== v) { parent[v] = parent[parent[v]]; v = parent[v]; }
+    return v;
+  }
+  for (let s = 0; s < indices.length; s += k + 1)
+    for (let m = 1; m <= k; ++m) {
+      const a = root(indices[s]), b = root(indices[s + m]);
+      if (a !== b) parent[Math.max(a, b)] = Math.min(a, b);
+    }
+  const component = new Int32Array(V);  // numbered 0, 1, .. in the order of their first vertex
+  let components = 0;
+  {
+    const number = new Int32Array(V).fill(-1);
+    for (let v = 0; v < V; ++v) {
+      const r = root(v);
+      if (number[r] < 0) number[r] = components++;
+      component[v] = number[r];
+    }
+  }
   const lo = new Array(d).fill(Infinity), hi = new Array(d).fill(-Infinity);
   for (let v = 0; v < V; ++v)
     for (let j = 0; j < d; ++j) {
@@ -89,6 +128,11 @@
     coolwarm: [[0.230, 0.299, 0.754], [0.865, 0.865, 0.865], [0.706, 0.016, 0.150]],
     rainbow: [[0.25, 0.0, 0.8], [0.0, 0.4, 1.0], [0.0, 0.8, 0.4], [0.9, 0.85, 0.0], [0.95, 0.1, 0.0]],
   };
+  // Components: tab10 without its red and pink (the singular points and uncertified cells' colours).
+  const CATEGORIES = [[0.122, 0.467, 0.706], [1.0, 0.498, 0.055], [0.173, 0.627, 0.173],
+                      [0.580, 0.404, 0.741], [0.549, 0.337, 0.294], [0.737, 0.741, 0.133],
+                      [0.090, 0.745, 0.812], [0.498, 0.498, 0.498]];
+  const PLAIN = [0.27, 0.45, 0.70];
   function colourAt(map, t) {
     if (!Number.isFinite(t)) return [0.6, 0.6, 0.6];
     const stops = MAPS[map], x = Math.min(Math.max(t, 0), 1) * (stops.length - 1);
@@ -107,6 +151,7 @@
   }
   renderer.setPixelRatio(window.devicePixelRatio || 1);
   renderer.setClearColor(0xf4f4f2);
+  renderer.autoClear = false;  // draw() clears once, then draws the mesh and the triad
   $('canvas').appendChild(renderer.domElement);
   const scene = new THREE.Scene(), group = new THREE.Group();
   scene.add(group);
@@ -179,6 +224,71 @@
     return m;
   });
 
+  // --- The axis triad: where each coordinate axis e_j of R^d goes, drawn in a corner -------
+  // The arrow of axis j is (R_a0 j, R_a1 j, R_a2 j) (column j of the shown rows of R), turned
+  // like the mesh by the mouse; its length is 1 when e_j lies in the shown 3-space, 0 when the
+  // projection drops it. The circle is length 1.
+  const TRIAD = 150;  // CSS pixels, lower right
+  const triadScene = new THREE.Scene(), triadGroup = new THREE.Group();
+  triadScene.add(triadGroup);
+  const triadCamera = new THREE.OrthographicCamera(-1.55, 1.55, 1.55, -1.55, -10, 10);
+  {
+    const ring = [];
+    for (let a = 0; a <= 64; ++a) ring.push(new THREE.Vector3(Math.cos(a * Math.PI / 32), Math.sin(a * Math.PI / 32), 0));
+    triadScene.add(new THREE.Line(new THREE.BufferGeometry().setFromPoints(ring),
+      new THREE.LineBasicMaterial({ color: 0xb0b0b0 })));
+  }
+  const triad = Array.from({ length: axes }, (_, j) => {
+    const colour = new THREE.Color().setHSL(j / axes * 0.85, 0.8, 0.34);
+    const line = new THREE.Line(new THREE.BufferGeometry().setFromPoints([new THREE.Vector3(), new THREE.Vector3()]),
+      new THREE.LineBasicMaterial({ color: colour, depthTest: false }));
+    const tip = new THREE.Mesh(new THREE.SphereGeometry(0.045, 10, 8),
+      new THREE.MeshBasicMaterial({ color: colour, depthTest: false }));
+    // The label: the coordinate's name drawn into a texture, on a sprite beyond the tip.
+    const text = document.createElement('canvas'), font = 'bold 32px system-ui, sans-serif';
+    let g = text.getContext('2d');
+    g.font = font;
+    text.width = Math.ceil(g.measureText(names[j]).width) + 12;
+    text.height = 44;
+    g = text.getContext('2d');
+    g.font = font;
+    g.textBaseline = 'middle';
+    g.lineWidth = 6;
+    g.strokeStyle = 'rgba(244, 244, 242, 0.9)';
+    g.strokeText(names[j], 6, 23);
+    g.fillStyle = '#' + colour.getHexString();
+    g.fillText(names[j], 6, 23);
+    const texture = new THREE.CanvasTexture(text);
+    texture.colorSpace = THREE.SRGBColorSpace;
+    const label = new THREE.Sprite(new THREE.SpriteMaterial({ map: texture, depthTest: false }));
+    label.scale.set(0.42 * text.width / text.height, 0.42, 1);
+    label.renderOrder = 3;
+    triadGroup.add(line, tip, label);
+    return { line, tip, label, vector: new THREE.Vector3() };
+  });
+
+  function updateTriad() {
+    triadGroup.quaternion.copy(group.quaternion);
+    triad.forEach((t, j) => {
+      t.vector.set(R[axis[0]][j], R[axis[1]][j], R[axis[2]][j]);
+      const ends = t.line.geometry.attributes.position;
+      ends.setXYZ(1, t.vector.x, t.vector.y, t.vector.z);
+      ends.needsUpdate = true;
+      t.tip.position.copy(t.vector);
+      // The label beyond the tip, pushed out of the centre where the arrow is short.
+      const length = t.vector.length();
+      t.label.position.copy(t.vector).multiplyScalar(length > 1e-6 ? (length + 0.3) / length : 0);
+    });
+  }
+
+  /** The arrows as the page shows them: in the camera's frame (x right, y up, z to the viewer). */
+  function triadState() {
+    return triad.map((t, j) => {
+      const v = t.vector.clone().applyQuaternion(group.quaternion);
+      return { label: names[j], x: v.x, y: v.y, z: v.z };
+    });
+  }
+
   // --- Updates -----------------------------------------------------------------------------
   let dirty = true;
   function updatePositions() {
@@ -192,23 +302,50 @@
     const place = new THREE.Matrix4();
     cells.forEach((p, i) => { project(p, 0, q, 0); cellMarks.setMatrixAt(i, place.makeTranslation(q[0], q[1], q[2])); });
     cellMarks.instanceMatrix.needsUpdate = true;
+    updateTriad();
     dirty = true;
   }
 
+  /** What the colour select says: 'component', 'plain' or the name of a coordinate. */
+  function colourMode() {
+    const value = $('colorBy').value;
+    return value === 'component' || value === 'plain' ? value : names[+value];
+  }
+
   function updateColours() {
-    const c = +$('colorBy').value, map = $('colormap').value, a = colours.array;
-    const span = hi[c] > lo[c] ? hi[c] - lo[c] : 1;
-    for (let v = 0; v < V; ++v) a.set(colourAt(map, (raw[v * d + c] - lo[c]) / span), v * 3);
+    const mode = $('colorBy').value, map = $('colormap').value, a = colours.array;
+    // The colour bar: a coordinate's map, one swatch per component (cycling), or one colour.
+    let barColour, name, min = '', max = '';
+    if (mode === 'component') {
+      for (let v = 0; v < V; ++v) a.set(CATEGORIES[component[v] % CATEGORIES.length], v * 3);
+      const swatches = Math.max(Math.min(components, 16), 1);
+      barColour = (t) => CATEGORIES[Math.min(Math.floor(t * swatches), swatches - 1) % CATEGORIES.length];
+      name = 'colour: connected component (' + components + ')';
+      if (components > 0) { min = '1'; max = String(components); }
+    } else if (mode === 'plain') {
+      for (let v = 0; v < V; ++v) a.set(PLAIN, v * 3);
+      barColour = () => PLAIN;
+      name = 'colour: plain';
+    } else {
+      const c = +mode, span = hi[c] > lo[c] ? hi[c] - lo[c] : 1;
+      for (let v = 0; v < V; ++v) a.set(colourAt(map, (raw[v * d + c] - lo[c]) / span), v * 3);
+      barColour = (t) => colourAt(map, t);
+      name = 'colour: ' + names[c];
+      if (Number.isFinite(lo[c])) { min = lo[c].toPrecision(3); max = hi[c].toPrecision(3); }
+    }
+    // The maps are sRGB; three.js takes vertex colours as linear and converts them on output.
+    for (let i = 0; i < a.length; ++i) a[i] = a[i] <= 0.04045 ? a[i] / 12.92 : Math.pow((a[i] + 0.055) / 1.055, 2.4);
     colours.needsUpdate = true;
+    $('colormap').disabled = mode === 'component' || mode === 'plain';
     const bar = $('colorbar').getContext('2d');
     for (let x = 0; x < 220; ++x) {
-      const [r, g, b] = colourAt(map, x / 219);
+      const [r, g, b] = barColour(x / 219);
       bar.fillStyle = `rgb(${255 * r | 0},${255 * g | 0},${255 * b | 0})`;
       bar.fillRect(x, 0, 1, 12);
     }
-    $('colorName').textContent = 'colour: ' + names[c];
-    $('colorMin').textContent = Number.isFinite(lo[c]) ? lo[c].toPrecision(3) : '';
-    $('colorMax').textContent = Number.isFinite(hi[c]) ? hi[c].toPrecision(3) : '';
+    $('colorName').textContent = name;
+    $('colorMin').textContent = min;
+    $('colorMax').textContent = max;
     dirty = true;
   }
 
@@ -216,6 +353,7 @@
     markers.forEach((m) => { m.visible = $('showSingular').checked; });
     overlay.visible = cellMarks.visible = $('showUncertified').checked;
     if (edges) edges.visible = $('showWire').checked;
+    triadScene.visible = $('showTriad').checked;
     dirty = true;
   }
 
@@ -226,16 +364,37 @@
     s.value = value;
   }
   axis.forEach((a, m) => fillSelect('axis' + m, a));
-  // Beyond R^3 the first view turns each shown axis m by 30 degrees towards coordinate m + 3
-  // (where there is one), so that sheets that the plain projection to three coordinates lays
-  // on top of each other (a double cover) come apart. `Reset` shows the plain coordinates.
+  // Beyond R^3 the first view is turned by 30 degrees in the plane of the first and the fourth
+  // coordinate, so that sheets that the plain projection to three coordinates lays on top of
+  // each other (a double cover, the Clifford torus) come apart. The controls say so (plane
+  // u0 - u3, slider at 30) and R is made from them as by the slider: what they read is what is
+  // drawn. `Reset` shows the plain coordinates.
   fillSelect('planeI', 0);
   fillSelect('planeJ', Math.min(3, d - 1));
-  for (let m = 0; m < 3 && m + 3 < d; ++m) base = rotated(base, m, m + 3, Math.PI / 6);
-  R = base;
-  fillSelect('colorBy', first + Math.min(3, data.n - 1));  // u3, or the last of u0 .. u{n-1}
+  $('angle').value = d > 3 ? 30 : 0;
+  // The colour: ?colour= of the address, else by component when there are several, else u3
+  // (or the last of u0 .. u{n-1}).
+  {
+    const s = $('colorBy');
+    names.forEach((name, j) => { if (j < axes) s.add(new Option(name, j)); });
+    s.add(new Option('component', 'component'));
+    s.add(new Option('plain', 'plain'));
+    const wanted = params.get('colour') || params.get('color');
+    const byName = names.indexOf(wanted), byU = /^u\d+$/.test(wanted || '') ? first + +wanted.slice(1) : -1;
+    s.value = wanted === 'component' || wanted === 'plain' ? wanted
+      : byName >= 0 && byName < axes ? byName : byU >= first && byU < axes ? byU
+      : components > 1 ? 'component' : first + Math.min(3, data.n - 1);
+    if (MAPS[params.get('map')]) $('colormap').value = params.get('map');
+  }
 
   const plane = () => [+$('planeI').value, +$('planeJ').value];
+  /** R from the controls: the slider's angle in the chosen plane, composed with the rotation so far. */
+  function rotationFromControls() {
+    const [i, j] = plane(), deg = +$('angle').value;
+    $('angleText').textContent = deg + '°';
+    R = i === j ? base : rotated(base, i, j, (deg * Math.PI) / 180);
+  }
+  rotationFromControls();
   function commitRotation() { base = R; $('angle').value = 0; $('angleText').textContent = '0°'; }
   [0, 1, 2].forEach((m) => $('axis' + m).addEventListener('change', () => {
     axis[m] = +$('axis' + m).value;
@@ -243,15 +402,13 @@
   }));
   ['planeI', 'planeJ'].forEach((id) => $(id).addEventListener('change', commitRotation));
   $('angle').addEventListener('input', () => {
-    const [i, j] = plane(), deg = +$('angle').value;
-    $('angleText').textContent = deg + '°';
-    R = i === j ? base : rotated(base, i, j, (deg * Math.PI) / 180);
+    rotationFromControls();
     updatePositions();
   });
   $('reset').addEventListener('click', () => { R = identity(); commitRotation(); updatePositions(); });
   $('colorBy').addEventListener('change', updateColours);
   $('colormap').addEventListener('change', updateColours);
-  ['showSingular', 'showUncertified', 'showWire'].forEach((id) =>
+  ['showSingular', 'showUncertified', 'showWire', 'showTriad'].forEach((id) =>
     $(id).addEventListener('change', updateVisibility));
 
   // Mouse: drag turns the 3-D view, the wheel zooms.
@@ -264,6 +421,7 @@
     drag = [e.clientX, e.clientY];
     const q = new THREE.Quaternion().setFromEuler(new THREE.Euler(dy, dx, 0));
     group.quaternion.premultiply(q);
+    updateTriad();
     dirty = true;
   });
   renderer.domElement.addEventListener('wheel', (e) => {
@@ -284,6 +442,39 @@
     base = R;
     updatePositions();
   }
+
+  /** The mesh over the whole canvas, then the triad in its corner. */
+  function draw() {
+    const w = renderer.domElement.clientWidth, h = renderer.domElement.clientHeight;
+    renderer.setScissorTest(false);
+    renderer.setViewport(0, 0, w, h);
+    renderer.clear();
+    renderer.render(scene, camera);
+    if (triadScene.visible) {
+      renderer.clearDepth();
+      renderer.setScissorTest(true);
+      renderer.setScissor(w - TRIAD - 10, 10, TRIAD, TRIAD);
+      renderer.setViewport(w - TRIAD - 10, 10, TRIAD, TRIAD);
+      renderer.render(triadScene, triadCamera);
+      renderer.setScissorTest(false);
+      renderer.setViewport(0, 0, w, h);
+    }
+  }
+
+  /** The canvas as a PNG (a data: URL), drawn afresh. */
+  function exportPng() {
+    draw();
+    return renderer.domElement.toDataURL('image/png');
+  }
+  window.ndcExportPng = exportPng;
+  $('savePng').addEventListener('click', () => {
+    const link = document.createElement('a');
+    link.href = exportPng();
+    link.download = String(summary.problem || data.source || 'ndcontour').replace(/[^\w.-]+/g, '_') + '.png';
+    document.body.appendChild(link);
+    link.click();
+    link.remove();
+  });
 
   function resize() {
     renderer.setSize(window.innerWidth, window.innerHeight);
@@ -312,6 +503,18 @@
   $('uncertifiedText').textContent = 'uncertified cell (' + cells.length + ': cubes at the centres; ' +
     bads + (k === 2 ? ' triangles' : ' segments') + ' inside)';
 
+  // An empty result: say so where the mesh would be.
+  let message = '';
+  if (V === 0) {
+    message = emptyZeroSet
+      ? 'The zero set does not meet the domain: the subdivision excluded every cell, so there ' +
+        'is nothing to draw (summary.json: diagnostics.empty_zero_set).'
+      : 'The mesh of this result has no vertices: there is nothing to draw.';
+    $('message').innerHTML = '<b>Empty result</b>';
+    $('message').appendChild(document.createTextNode(message));
+    $('message').hidden = false;
+  }
+
   // --- Go ----------------------------------------------------------------------------------
   resize();
   updatePositions();
@@ -321,7 +524,7 @@
   function frame(time) {
     if ($('tour').checked) tourStep(time);
     if (dirty) {
-      renderer.render(scene, camera);
+      draw();
       dirty = false;
       if (firstFrame) {
         firstFrame = false;
@@ -329,7 +532,16 @@
                   triangles: k === 2 ? main.geometry.index.count / 3 : 0,
                   segments: k === 1 ? main.geometry.index.count / 2 : 0,
                   uncertified: overlay.geometry.index.count / per, singular: markers.length,
-                  uncertifiedCells: cellMarks.count });
+                  uncertifiedCells: cellMarks.count,
+                  names: names.slice(0, axes), components: components, colour: colourMode(),
+                  triad: triadState(), rotation: R.map((row) => Array.from(row)),
+                  controls: { shown: [0, 1, 2].map((m) => +$('axis' + m).value), plane: plane(),
+                              angle: +$('angle').value, angleText: $('angleText').textContent },
+                  view: group.quaternion.toArray(),
+                  empty: V === 0, message: message,
+                  canvas: [renderer.domElement.width, renderer.domElement.height] });
+        // #png in the address: the PNG export, for tests (docs/viewer.md).
+        if (params.has('png')) publish({ png: exportPng() });
       }
     }
     requestAnimationFrame(frame);
