@@ -3,13 +3,28 @@
 
 Usage: viewer_test.py NDCONTOUR CHROMIUM [--keep DIR]
 
-Solves a surface in R^3, a surface in R^4 and a curve in R^5, writes each result's page, loads it
-in headless Chromium (WebGL by SwiftShader), reads window.ndcView from the DOM (the page copies it
-into #ndc-view-state), checks that it drew as many triangles or segments and vertices as mesh.ply
-holds, and that a screenshot of the page is not blank. With --keep the screenshots are kept.
+Solves two spheres in R^3 (two components), the Clifford torus in R^4, a circle in R^5 and a
+problem whose zero set misses the domain, writes each result's page and loads it in headless
+Chromium (WebGL by SwiftShader; the four at once), reads window.ndcView from the DOM (the page
+copies it into #ndc-view-state) and checks:
+- that it drew as many triangles or segments and vertices as mesh.ply holds;
+- the names: the controls and the axis triad name the coordinates by summary.json's
+  `variables`, or u0 .. u{n-1} where it has none (the circle's summary is stripped of them);
+- the triad: arrow j is column j of the shown rows of R turned by the 3-D view, and the squared
+  lengths add up to 3 (R is orthogonal);
+- the first view: R is the rotation that the plane selects and the slider read (30 degrees in
+  the plane u0 - u3 beyond R^3, none in R^3);
+- the colour: by component by default where there are several, and the page's count of
+  components equals summary.json's mesh.components; `#colour=plain` in the address;
+- the PNG export (`#png` in the address: the page publishes the canvas as a PNG data URL): a
+  PNG of the canvas' size, in which the mesh covers pixels outside the triad's corner;
+- an empty result: a message saying that the zero set does not meet the domain.
+With --keep the screenshots (whole page) and the exported PNGs are kept.
 """
+import base64
 import html
 import json
+import math
 import os
 import re
 import shutil
@@ -20,14 +35,23 @@ import tempfile
 import zlib
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-CASES = [  # (name, problem, solve options)
-    ("torus", "torus.toml", ["--depth", "4"]),
-    ("clifford", "clifford-torus.toml", ["--depth", "3"]),
-    ("circle-r5", "circle-r5.toml", ["--depth", "3"]),
+EMPTY = """name = "empty"
+description = "A sphere of radius 1 centred 3 away from the domain: M does not meet it."
+variables = ["p", "q", "r"]
+domain = [[-1, 1], [-1, 1], [-1, 1]]
+equations = ["(p - 3)^2 + q^2 + r^2 - 1"]
+"""
+CASES = [  # (name, problem, solve options, the page's address suffix, strip summary.variables)
+    ("two-spheres", "two-spheres.toml", ["--depth", "4"], "#png", False),
+    ("clifford", "clifford-torus.toml", ["--depth", "3"], "#png", False),
+    ("circle-r5", "circle-r5.toml", ["--depth", "3"], "#png&colour=plain", True),
+    ("empty", None, ["--depth", "3"], "", False),
 ]
+WIDTH, HEIGHT, TRIAD = 1000, 700, 170  # the window; the triad's corner (150 px and margins)
 FLAGS = ["--headless=new", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
          "--enable-unsafe-swiftshader", "--hide-scrollbars", "--no-first-run",
-         "--disable-dev-shm-usage", "--window-size=1000,700", "--virtual-time-budget=8000"]
+         "--disable-dev-shm-usage", f"--window-size={WIDTH},{HEIGHT}",
+         "--virtual-time-budget=8000"]
 
 
 def fail(message):
@@ -56,24 +80,17 @@ def ply_counts(path):
     fail(path + ": no end_header")
 
 
-def chromium(browser, profile, page, *args):
-    return run([browser, *FLAGS, "--user-data-dir=" + profile, *args, "file://" + page],
-               timeout=180)
-
-
-def view_state(dom):
+def view_state(dom, name):
     m = re.search(r'<pre id="ndc-view-state">(.*?)</pre>', dom, re.S)
     if not m or not m.group(1).strip():
-        fail("the page published no ndcView (no WebGL?)")
+        fail(name + ": the page published no ndcView (no WebGL?)")
     return json.loads(html.unescape(m.group(1)))
 
 
-def png_pixels(path):
-    """The distinct colours of an 8-bit RGB or RGBA PNG, and its size (zlib only, no PIL)."""
-    with open(path, "rb") as f:
-        data = f.read()
+def png_rows(data, name):
+    """The size and the pixel rows (RGB or RGBA bytes) of an 8-bit PNG (zlib only, no PIL)."""
     if data[:8] != b"\x89PNG\r\n\x1a\n":
-        fail(path + ": not a PNG")
+        fail(name + ": not a PNG")
     at, idat, header = 8, b"", None
     while at < len(data):
         length, kind = struct.unpack(">I4s", data[at:at + 8])
@@ -85,41 +102,122 @@ def png_pixels(path):
         at += 12 + length
     width, height, depth, colour = header[:4]
     if depth != 8 or colour not in (2, 6):
-        fail(f"{path}: PNG of bit depth {depth}, colour type {colour} not read")
+        fail(f"{name}: PNG of bit depth {depth}, colour type {colour} not read")
     bpp = 3 if colour == 2 else 4
     raw, stride = zlib.decompress(idat), width * bpp
-    previous, colours = bytearray(stride), set()
+    if len(raw) != height * (stride + 1):
+        fail(f"{name}: PNG data of {len(raw)} bytes for {width}x{height}")
+    previous, rows = bytearray(stride), []
     for y in range(height):
         kind, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
-        for x in range(stride):
-            a = line[x - bpp] if x >= bpp else 0
-            b = previous[x]
-            c = previous[x - bpp] if x >= bpp else 0
-            if kind == 1:
-                line[x] = (line[x] + a) & 255
-            elif kind == 2:
-                line[x] = (line[x] + b) & 255
-            elif kind == 3:
-                line[x] = (line[x] + (a + b) // 2) & 255
-            elif kind == 4:
-                p = a + b - c
-                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-                line[x] = (line[x] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
-        colours.update(bytes(line[x:x + 3]) for x in range(0, stride, bpp * 2))
+        if kind == 2:
+            line = bytearray((p + q) & 255 for p, q in zip(line, previous))
+        elif kind != 0:
+            for x in range(stride):
+                a = line[x - bpp] if x >= bpp else 0
+                b = previous[x]
+                c = previous[x - bpp] if x >= bpp else 0
+                if kind == 1:
+                    line[x] = (line[x] + a) & 255
+                elif kind == 3:
+                    line[x] = (line[x] + (a + b) // 2) & 255
+                elif kind == 4:
+                    p = a + b - c
+                    pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                    line[x] = (line[x] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+        rows.append(bytes(line))
         previous = line
-    return colours, width, height
+    return width, height, bpp, rows
 
 
-def check_case(ndcontour, browser, tmp, keep, name, problem, options):
-    out = os.path.join(tmp, name)
-    run([ndcontour, "solve", os.path.join(ROOT, "experiments", "problems", problem), *options,
-         "--out", out])
-    run([ndcontour, "view", out])
-    page = os.path.join(out, "view.html")
+def check_png(state, name, keep):
+    """The exported PNG: of the canvas' size; the mesh outside the triad's corner."""
+    url = state.get("png", "")
+    if not url.startswith("data:image/png;base64,"):
+        fail(f"{name}: the PNG export gave {url[:40]!r}")
+    data = base64.b64decode(url.split(",", 1)[1])
+    if keep:
+        with open(os.path.join(keep, name + "-export.png"), "wb") as f:
+            f.write(data)
+    width, height, bpp, rows = png_rows(data, name + " export")
+    if [width, height] != state["canvas"]:
+        fail(f"{name}: the exported PNG is {width}x{height}, the canvas {state['canvas']}")
+    # Pixels unlike the background (#f4f4f2) outside the triad's corner (lower right).
+    ratio = width / WIDTH
+    corner_x, corner_y = width - int(TRIAD * ratio), height - int(TRIAD * ratio)
+    colours, drawn = set(), 0
+    for y, row in enumerate(rows):
+        end = corner_x * bpp if y >= corner_y else width * bpp
+        for x in range(0, end, bpp):
+            pixel = row[x:x + 3]
+            if abs(pixel[0] - 0xf4) + abs(pixel[1] - 0xf4) + abs(pixel[2] - 0xf2) > 6:
+                drawn += 1
+                colours.add(pixel)
+    if drawn < 500:
+        fail(f"{name}: the exported PNG shows the mesh on only {drawn} pixels")
+    return width, height, drawn, len(colours)
+
+
+def check_names(state, summary, name, strip):
+    n = summary["n"]
+    variables = summary.get("variables")
+    want = variables if variables else [f"u{j}" for j in range(n)]
+    if strip and variables:
+        fail(f"{name}: summary.json still holds variables")
+    names = state["names"][-n:]
+    labels = [t["label"] for t in state["triad"]][-n:]
+    if names != want or labels != want:
+        fail(f"{name}: the controls name {names}, the triad {labels}, expected {want}")
+    return "summary.json's variables" if variables else "u0.. (no variables)"
+
+
+def check_triad(state, name):
+    """Arrow j = q (R[shown][:, j]), q the 3-D view; squared lengths add up to 3."""
+    R, shown = state["rotation"], state["controls"]["shown"]
+    qx, qy, qz, qw = state["view"]
+    total = 0.0
+    for j, arrow in enumerate(state["triad"]):
+        v = [R[shown[m]][j] for m in range(3)]
+        # v + 2 w (u x v) + 2 u x (u x v), u = (qx, qy, qz), w = qw
+        u = [qx, qy, qz]
+        c = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+        cc = [u[1] * c[2] - u[2] * c[1], u[2] * c[0] - u[0] * c[2], u[0] * c[1] - u[1] * c[0]]
+        turned = [v[i] + 2 * qw * c[i] + 2 * cc[i] for i in range(3)]
+        got = [arrow["x"], arrow["y"], arrow["z"]]
+        if max(abs(a - b) for a, b in zip(turned, got)) > 1e-6:
+            fail(f"{name}: triad arrow {arrow['label']} is {got}, the projection gives {turned}")
+        total += sum(a * a for a in got)
+    if abs(total - 3) > 1e-6:
+        fail(f"{name}: the triad's squared lengths add up to {total}, not 3")
+
+
+def check_rotation(state, name):
+    """The first view: R = the rotation by the slider's angle in the selected plane."""
+    R, controls = state["rotation"], state["controls"]
+    d = len(R)
+    i, j = controls["plane"]
+    angle = controls["angle"]
+    if angle != (30 if d > 3 else 0) or controls["angleText"] != f"{angle}°":
+        fail(f"{name}: the slider reads {angle} ({controls['angleText']!r})")
+    c, s = math.cos(math.radians(angle)), math.sin(math.radians(angle))
+    want = [[float(r == col) for col in range(d)] for r in range(d)]
+    if i != j:
+        want[i][i], want[i][j], want[j][i], want[j][j] = c, -s, s, c
+    if max(abs(R[r][col] - want[r][col]) for r in range(d) for col in range(d)) > 1e-9:
+        fail(f"{name}: R = {R}, but the controls (plane {i}-{j}, {angle} degrees) give {want}")
+    return f"plane {state['names'][i]}-{state['names'][j]} at {angle} deg"
+
+
+def check_case(tmp, keep, name, strip, out, chrome):
+    try:
+        done = chrome.communicate(timeout=180)
+    except subprocess.TimeoutExpired:
+        fail(name + ": chromium did not finish in 180 s")
+    if chrome.returncode != 0:
+        fail(f"{name}: chromium status {chrome.returncode}: {done[1].strip()[-500:]}")
+    state = view_state(done[0], name)
     summary = json.load(open(os.path.join(out, "summary.json")))
     counts = ply_counts(os.path.join(out, "mesh.ply"))
-    profile = os.path.join(tmp, "profile-" + name)
-    state = view_state(chromium(browser, profile, page, "--dump-dom"))
     want = {"ready": True, "n": summary["n"], "vertices": counts.get("vertex", 0),
             "triangles": counts.get("face", 0), "segments": counts.get("edge", 0)}
     got = {key: state.get(key) for key in want}
@@ -128,28 +226,75 @@ def check_case(ndcontour, browser, tmp, keep, name, problem, options):
     if summary["mesh"]["triangles" if summary["k"] == 2 else "edges"] != max(
             want["triangles"], want["segments"]):
         fail(f"{name}: summary.json's mesh disagrees with mesh.ply")
-    shot = os.path.join(tmp, name + ".png")
-    chromium(browser, profile, page, "--screenshot=" + shot)
-    colours, width, height = png_pixels(shot)
-    if len(colours) < 50:
-        fail(f"{name}: the screenshot ({width}x{height}) has only {len(colours)} colours")
+    if state["components"] != summary["mesh"]["components"]:
+        fail(f"{name}: the page counts {state['components']} components, summary.json "
+             f"{summary['mesh']['components']}")
+    named = check_names(state, summary, name, strip)
+    check_triad(state, name)
+    turned = check_rotation(state, name)
     if keep:
-        shutil.copy(shot, os.path.join(keep, name + ".png"))
+        shutil.copy(os.path.join(tmp, name + ".png"), os.path.join(keep, name + ".png"))
+    if name == "empty":
+        if not summary["diagnostics"]["empty_zero_set"] or not state["empty"] or \
+                "does not meet the domain" not in state["message"]:
+            fail(f"{name}: the page's message is {state['message']!r}")
+        print(f"viewer: {name}: message {state['message']!r}; names {named}")
+        return
+    if state["empty"] or state["message"]:
+        fail(f"{name}: a message on a page with a mesh: {state['message']!r}")
+    colour = {"two-spheres": "component", "clifford": state["names"][-1],
+              "circle-r5": "plain"}[name]
+    if state["colour"] != colour:
+        fail(f"{name}: coloured by {state['colour']!r}, expected {colour!r}")
+    width, height, drawn, colours = check_png(state, name, keep)
     print(f"viewer: {name}: n = {want['n']}, {want['vertices']} vertices, "
           f"{want['triangles'] or want['segments']} {'triangles' if want['triangles'] else 'segments'}"
-          f" drawn; screenshot {width}x{height}, {len(colours)} colours")
+          f", {state['components']} components drawn; names {named}; first view {turned}; "
+          f"colour {state['colour']}; PNG {width}x{height}, {drawn} pixels of {colours} colours")
 
 
 def main(argv):
     if len(argv) not in (3, 5) or (len(argv) == 5 and argv[3] != "--keep"):
         print("usage: viewer_test.py NDCONTOUR CHROMIUM [--keep DIR]", file=sys.stderr)
         return 2
+    ndcontour, browser = argv[1], argv[2]
     keep = argv[4] if len(argv) == 5 else None
     if keep:
         os.makedirs(keep, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="ndc-viewer-") as tmp:
-        for case in CASES:
-            check_case(argv[1], argv[2], tmp, keep, *case)
+        # Solve and write the pages, then load them all at once (Chromium mostly waits).
+        pages = []
+        for name, problem, options, suffix, strip in CASES:
+            out = os.path.join(tmp, name)
+            if problem is None:
+                problem = os.path.join(tmp, name + ".toml")
+                with open(problem, "w") as f:
+                    f.write(EMPTY)
+            else:
+                problem = os.path.join(ROOT, "experiments", "problems", problem)
+            run([ndcontour, "solve", problem, *options, "--out", out])
+            if strip:
+                path = os.path.join(out, "summary.json")
+                summary = json.load(open(path))
+                summary.pop("variables", None)
+                with open(path, "w") as f:
+                    json.dump(summary, f)
+            run([ndcontour, "view", out])
+            command = [browser, *FLAGS, "--user-data-dir=" + os.path.join(tmp, "profile-" + name),
+                       "--dump-dom", "--screenshot=" + os.path.join(tmp, name + ".png"),
+                       "file://" + os.path.join(out, "view.html") + suffix]
+            pages.append((name, strip, out, command))
+        chromes = [subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                    stdin=subprocess.DEVNULL, text=True, cwd=tmp)
+                   for _, _, _, command in pages]
+        try:
+            for (name, strip, out, command), chrome in zip(pages, chromes):
+                check_case(tmp, keep, name, strip, out, chrome)
+        finally:
+            for chrome in chromes:
+                if chrome.poll() is None:
+                    chrome.kill()
+                    chrome.communicate()
     print(f"viewer: {len(CASES)} passed, 0 failed")
     return 0
 
