@@ -263,22 +263,27 @@
     const label = new THREE.Sprite(new THREE.SpriteMaterial({ map: texture, depthTest: false }));
     label.scale.set(0.42 * text.width / text.height, 0.42, 1);
     label.renderOrder = 3;
-    triadGroup.add(line, tip, label);
+    triadGroup.add(line, tip);
+    triadScene.add(label);  // placed on the screen by updateTriad
     return { line, tip, label, vector: new THREE.Vector3() };
   });
 
   function updateTriad() {
     triadGroup.quaternion.copy(group.quaternion);
+    const central = [];
     triad.forEach((t, j) => {
       t.vector.set(R[axis[0]][j], R[axis[1]][j], R[axis[2]][j]);
       const ends = t.line.geometry.attributes.position;
       ends.setXYZ(1, t.vector.x, t.vector.y, t.vector.z);
       ends.needsUpdate = true;
       t.tip.position.copy(t.vector);
-      // The label beyond the tip, pushed out of the centre where the arrow is short.
-      const length = t.vector.length();
-      t.label.position.copy(t.vector).multiplyScalar(length > 1e-6 ? (length + 0.3) / length : 0);
+      // The label beyond the tip as seen on the screen; the labels of arrows too short to see
+      // (axes that the projection drops, or that point at the viewer) in a column at the centre.
+      const seen = t.vector.clone().applyQuaternion(group.quaternion), length = Math.hypot(seen.x, seen.y);
+      if (length < 0.15) central.push(t);
+      else t.label.position.set(seen.x * (length + 0.3) / length, seen.y * (length + 0.3) / length, 1);
     });
+    central.forEach((t, i) => t.label.position.set(0, ((central.length - 1) / 2 - i) * 0.42, 1));
   }
 
   /** The arrows as the page shows them: in the camera's frame (x right, y up, z to the viewer). */
