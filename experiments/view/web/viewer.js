@@ -377,7 +377,7 @@
   fillSelect('planeI', 0);
   fillSelect('planeJ', Math.min(3, d - 1));
   $('angle').value = d > 3 ? 30 : 0;
-  // The colour: ?colour= of the address, else by component when there are several, else u3
+  // The colour: #colour= in the address, else by component when there are several, else u3
   // (or the last of u0 .. u{n-1}).
   {
     const s = $('colorBy');
