@@ -8,7 +8,7 @@
 #       x,y,z; e.g. x2,y2,z2 for the second contact point of a convex-hull mesh). Each triangle
 #       is a closed polyline a b c a and each segment a b, followed by two blank lines (separate
 #       blocks, so that splot ... with lines draws no lines between them). --pm3d writes each
-#       triangle as a 2 x 2 grid (a b / c c) for `with pm3d` (shaded). --part P keeps only faces whose last face property (`part` of input.ply) is P.
+#       triangle as a 2 x 2 grid (a b / c m, m the midpoint of b and c) for `with pm3d` (shaded, lit). --part P keeps only faces whose last face property (`part` of input.ply) is P.
 #   scripts/ply2dat.sh --eye EX,EY,EZ --target TX,TY,TZ [...] FILE.ply
 #       the same, every point projected in perspective from the eye point E looking at T (world
 #       z up): x y = the perspective image (right, up over the depth), z = minus the depth along
@@ -113,7 +113,10 @@ awk -v file="$file" -v props="$props" -v mode="$mode" -v every="$every" -v part=
       if (part != "" && $NF != part) next
       a = $2; b = $3; c = $4
       if (mode == "pm3d") {
-        pt(a); pt(b); print ""; pt(c); pt(c); print ""; print ""
+        # m, the midpoint of b and c: every three corners of a b / c m span the triangle, so
+        # that the lighting of gnuplot finds its normal (a b / c c has none: one flat colour).
+        for (i = 1; i <= nwant; ++i) coord["m", i] = 0.5 * (coord[b, i] + coord[c, i])
+        pt(a); pt(b); print ""; pt(c); pt("m"); print ""; print ""
       } else {
         pt(a); pt(b); pt(c); pt(a); print ""; print ""
       }

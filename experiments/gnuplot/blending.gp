@@ -31,9 +31,11 @@ set border 4095 lw 0.5 lc rgb "#808080"
 set tics font ",10"
 set xlabel "x"; set ylabel "y"; set zlabel "z"
 unset colorbox
-set key top right
-set pm3d depthorder border lw 0.2 lc rgb "#603018"
-set pm3d lighting primary 0.55 specular 0.25
+# Lit and without edges (pm3d borders drew a dark mesh over the surface, in stripes on fine
+# meshes); the legend beside the box, off the data.
+set key outside right top
+set pm3d depthorder noborder
+set pm3d lighting primary 0.5 specular 0.2
 # Each triangle or segment is its own block: without this, splot joins blocks of equal length
 # as a grid and draws spurious lines between separate parts.
 set surface explicit

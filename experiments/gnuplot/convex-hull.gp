@@ -34,7 +34,8 @@ set xyplane 0
 set border 4095 lw 0.5 lc rgb "#808080"
 set tics font ",10"
 set xlabel "x"; set ylabel "y"; set zlabel "z"
-set key top right
+# The legend beside the box, off the data.
+set key outside right top
 # Each triangle or segment is its own block: without this, splot joins blocks of equal length
 # as a grid and draws spurious lines between separate parts.
 set surface explicit

@@ -41,16 +41,23 @@ set border 4095 lw 0.5 lc rgb "#808080"
 set tics font ",10"
 set xlabel "x"; set ylabel "y"; set zlabel "z"
 unset colorbox
-set key top right
-set pm3d depthorder border lw 0.15 lc rgb "#303030"
-set pm3d lighting primary 0.55 specular 0.25
+# Lit and without edges (pm3d borders drew a dark mesh over the surface, in stripes on fine
+# meshes); the legend beside the box, off the data.
+set key outside right top
+set pm3d depthorder noborder
+set pm3d lighting primary 0.5 specular 0.2
+# The body touches the envelope along the characteristic curves: drawn a little farther from the
+# viewer (along the view direction, so at the same place of the picture), it lies behind the
+# envelope there, and depth sorting does not interleave their triangles in stripes.
+vx = sin(58 * pi / 180) * sin(28 * pi / 180); vy = -sin(58 * pi / 180) * cos(28 * pi / 180)
+vz = cos(58 * pi / 180); back = 0.03 * sqrt((x1 - x0)**2 + (y1 - y0)**2 + (z1 - z0)**2)
 set multiplot layout 1, 2 title "sweep-envelope: ".problem noenhanced
 set title "(a) the moving body A(t)[S]"
 splot shaded with pm3d fillcolor rgb "#d08a3c" notitle, \
       keyentry with boxes fill solid 1.0 lc rgb "#d08a3c" title "five instants"
 set title "(b) the envelope, equation (4)"
-splot shaded with pm3d fillcolor rgb "#e0e0e0" notitle, \
-      keyentry with boxes fill solid 1.0 lc rgb "#e0e0e0" title "body", \
+splot shaded using ($1 - back * vx):($2 - back * vy):($3 - back * vz) with pm3d fillstyle transparent solid 0.5 fillcolor rgb "#c8c8c8" notitle, \
+      keyentry with boxes fill transparent solid 0.5 lc rgb "#c8c8c8" title "body", \
       mesh with pm3d fillcolor rgb "#4a86d0" notitle, \
       keyentry with boxes fill solid 1.0 lc rgb "#4a86d0" title "envelope"
 unset multiplot

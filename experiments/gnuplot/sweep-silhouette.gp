@@ -44,9 +44,10 @@ set output dir."/sweep-silhouette.png"
 set xyplane 0
 set surface explicit
 unset colorbox
-set key top right samplen 2
+# The legend beside the picture, off the data; surfaces lit.
+set key outside right top samplen 2
 set pm3d depthorder noborder
-set pm3d lighting primary 0.55 specular 0.2
+set pm3d lighting primary 0.5 specular 0.2
 if (perspective) {
   set title problem.": perspective from the eye (".eye.")" noenhanced
   # Looking down the projected depth axis shows the perspective picture; the image axes are
@@ -81,10 +82,17 @@ if (perspective) {
   set border 4095 lw 0.5 lc rgb "#808080"
   set xlabel "x"; set ylabel "y"; set zlabel "z"
 }
+# The body touches the envelope along the characteristic curves: drawn a little farther from the
+# viewer (along the view direction, so at the same place of the picture), it lies behind the
+# envelope there, and depth sorting does not interleave their triangles in stripes.
+back = 0.01 * sqrt((B_max_x - B_min_x)**2 + (B_max_y - B_min_y)**2 + (BZ_max - BZ_min)**2)
+vx = perspective ? 0 : sin(62 * pi / 180) * sin(35 * pi / 180)
+vy = perspective ? 0 : -sin(62 * pi / 180) * cos(35 * pi / 180)
+vz = perspective ? 1 : cos(62 * pi / 180)
 if (strlen(envelope) > 0) {
   splot shell with pm3d fillstyle transparent solid 0.6 fillcolor rgb "#9ecae1" notitle, \
         keyentry with boxes fill transparent solid 0.6 lc rgb "#9ecae1" title "envelope of the swept volume", \
-        body with pm3d fillcolor rgb "#f0d8b0" notitle, \
+        body using ($1 - back * vx):($2 - back * vy):($3 - back * vz) with pm3d fillcolor rgb "#f0d8b0" notitle, \
         keyentry with boxes fill solid 1.0 lc rgb "#f0d8b0" title "body, five instants", \
         curves with lines lc rgb "#a50f15" lw 4 title "silhouette, (4) and (5)"
 } else {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "experiments/report/table.hpp"
@@ -34,6 +35,15 @@ View perspectiveView(const std::array<double, 3>& eye, const std::array<double, 
   return v;
 }
 
+View orthographicView(double rotX, double rotZ) {
+  // gnuplot turns the scene by rotZ about z, then by rotX about x, and looks down the turned z
+  // axis: the unturned direction towards the viewer is this one.
+  const double x = rotX * std::numbers::pi / 180, z = rotZ * std::numbers::pi / 180;
+  View v;
+  v.toViewer = {std::sin(x) * std::sin(z), -std::sin(x) * std::cos(z), std::cos(x)};
+  return v;
+}
+
 /// A mesh's vertices through `view`.
 std::vector<std::array<double, 3>> viewed(const std::vector<std::array<double, 3>>& xyz,
                                           const View& view) {
@@ -43,17 +53,31 @@ std::vector<std::array<double, 3>> viewed(const std::vector<std::array<double, 3
   return out;
 }
 
-/// A mesh's triangles for `with pm3d` (shaded, lit): each a 2 x 2 grid a b / c c, a blank line
-/// inside and two after it.
-std::vector<std::vector<double>> trianglePm3d(const PlyMesh& m, const View& view) {
-  const std::vector<std::array<double, 3>> p = viewed(m.xyz, view);
+/// A mesh's triangles for `with pm3d` (shaded, lit): each a 2 x 2 grid a b / c m (m the
+/// midpoint of b and c, so that gnuplot's lighting finds a normal), a blank line inside and two
+/// after it.
+std::vector<std::vector<double>> trianglePm3d(const PlyMesh& m, const View& view, double pushBack) {
+  std::vector<std::array<double, 3>> p = viewed(m.xyz, view);
+  for (auto& q : p)
+    for (int j = 0; j < 3; ++j) q[j] -= pushBack * view.toViewer[j];
   std::vector<std::vector<double>> rows;
   for (const auto& s : m.simplices) {
     if (s.size() != 3) continue;
     const auto row = [&](int v) { return std::vector<double>{p[v][0], p[v][1], p[v][2]}; };
-    rows.insert(rows.end(), {row(s[0]), row(s[1]), {}, row(s[2]), row(s[2]), {}, {}});
+    // The midpoint of the image of b and c: a projection keeps it on the image of the edge.
+    std::vector<double> mid(3);
+    for (int j = 0; j < 3; ++j) mid[j] = 0.5 * (p[s[1]][j] + p[s[2]][j]);
+    rows.insert(rows.end(), {row(s[0]), row(s[1]), {}, row(s[2]), mid, {}, {}});
   }
   return rows;
+}
+
+double drawnDiagonal(const std::vector<std::array<double, 3>>& points, const View& view) {
+  const auto box = boundingBox(viewed(points, view));
+  double squared = 0;
+  for (const auto& b : box)
+    if (b[1] >= b[0]) squared += (b[1] - b[0]) * (b[1] - b[0]);
+  return std::sqrt(squared);
 }
 
 /// The bounding box of points: {min, max} per axis.

@@ -22,6 +22,9 @@ struct View {
   std::array<double, 3> right{};    ///< the image's x direction (unit)
   std::array<double, 3> up{};       ///< the image's y direction (unit)
   std::array<double, 3> forward{};  ///< the view direction (unit)
+  /// Where the viewer is, as a unit direction in drawn coordinates: a point moved along it is
+  /// drawn at the same place of the picture, only nearer (see trianglePm3d's `pushBack`).
+  std::array<double, 3> toViewer{0, 0, 1};
 
   /// Where `p` is drawn.
   std::array<double, 3> operator()(const std::array<double, 3>& p) const {
@@ -38,13 +41,28 @@ struct View {
 /// The perspective view from `eye` towards `target`, world z up.
 View perspectiveView(const std::array<double, 3>& eye, const std::array<double, 3>& target);
 
+/// gnuplot's orthographic view `set view ROT_X, ROT_Z` (degrees; with `set view equal xyz`):
+/// points are drawn as they are, and View::toViewer is the direction towards the viewer.
+View orthographicView(double rotX, double rotZ);
+
 /// A mesh's vertices through `view`.
 std::vector<std::array<double, 3>> viewed(const std::vector<std::array<double, 3>>& xyz,
                                           const View& view);
 
-/// A mesh's triangles for `with pm3d` (shaded, lit): each a 2 x 2 grid a b / c c, a blank line
-/// inside and two after it.
-std::vector<std::vector<double>> trianglePm3d(const PlyMesh& m, const View& view);
+/// A mesh's triangles for `with pm3d` (shaded, lit): each a 2 x 2 grid a b / c m, where m is
+/// the midpoint of b and c, with a blank line inside and two after it. The quadrangle a b m c is
+/// the triangle, and every three of its corners span its plane: gnuplot's lighting takes the
+/// normal from three corners, and a grid a b / c c (two equal corners) has none, so it drew
+/// every triangle in one flat colour. `pushBack` > 0 moves every point that far away from the
+/// viewer (View::toViewer): the picture is the same, but where this surface touches another one
+/// (the input surfaces along a blend's rails, the body along a sweep's characteristic curves)
+/// pm3d's depth sorting puts the other one in front, instead of interleaving their triangles in
+/// stripes.
+std::vector<std::vector<double>> trianglePm3d(const PlyMesh& m, const View& view,
+                                              double pushBack = 0);
+
+/// The length of the diagonal of the bounding box of `points` as drawn through `view`.
+double drawnDiagonal(const std::vector<std::array<double, 3>>& points, const View& view);
 
 /// The bounding box of points: {min, max} per axis (HUGE_VAL, -HUGE_VAL without finite points).
 std::array<std::array<double, 2>, 3> boundingBox(const std::vector<std::array<double, 3>>& points);

@@ -25,6 +25,13 @@
 namespace ndc::report::detail {
 namespace {
 
+/// gnuplot's view of the orthographic panels (`set view 62, 35`), degrees.
+constexpr int kRotX = 62, kRotZ = 35;
+/// How far the context surfaces (input, envelope) are pushed away from the viewer, as a share
+/// of the input's drawn diagonal (trianglePm3d): the result is drawn in front where it touches
+/// them, with no stripes.
+constexpr double kPushBack = 0.01;
+
 /// Per problem the successful run at the largest depth, when it has a mesh.ply.
 std::vector<std::size_t> applicationRuns(const CsvTable& t, const std::filesystem::path& dir) {
   std::vector<std::size_t> picks;
@@ -91,7 +98,9 @@ void plotContext(GnuplotScript& gp, const std::filesystem::path& run, std::size_
                  const View& view, Panel& panel) {
   if (std::filesystem::exists(run / "input.ply")) {
     const PlyMesh input = readPly(run / "input.ply");
-    gp.data("input" + std::to_string(p), trianglePm3d(input, view));
+    // Behind the result, and behind the envelope, where they touch.
+    const double push = kPushBack * drawnDiagonal(input.xyz, view);
+    gp.data("input" + std::to_string(p), trianglePm3d(input, view, 2 * push));
     panel.plots.push_back("$input" + std::to_string(p) +
                           " with pm3d fs transparent solid 0.35 fc rgb \"#bdbdbd\" notitle");
     panel.plots.push_back(
@@ -101,7 +110,9 @@ void plotContext(GnuplotScript& gp, const std::filesystem::path& run, std::size_
   if (!view.perspective) return;
   const std::filesystem::path envelope = sameInputSurface(run);
   if (envelope.empty()) return;
-  gp.data("envelope" + std::to_string(p), trianglePm3d(readPly(envelope / "mesh.ply"), view));
+  const PlyMesh shell = readPly(envelope / "mesh.ply");
+  gp.data("envelope" + std::to_string(p),
+          trianglePm3d(shell, view, kPushBack * drawnDiagonal(shell.xyz, view)));
   panel.plots.push_back("$envelope" + std::to_string(p) +
                         " with pm3d fs transparent solid 0.6 fc rgb \"#9ecae1\" notitle");
   panel.plots.push_back(
@@ -151,7 +162,7 @@ void plotResult(GnuplotScript& gp, const PlyMesh& mesh, std::size_t p, bool curv
 /// (grown by 15% of their diagonal; farther parts of the result, e.g. of an untrimmed
 /// bisector, are clipped) or from everything when there is no input.
 void orthographicAxes(GnuplotScript& gp, const Panel& panel) {
-  gp.command("set view 62, 35, 1.2");
+  gp.command("set view " + std::to_string(kRotX) + ", " + std::to_string(kRotZ) + ", 1.2");
   gp.command("set view equal xyz");
   gp.command("set border 4095 lw 0.5 lc rgb \"#808080\"");
   gp.command("set xtics; set ytics; set ztics");
@@ -197,7 +208,7 @@ std::string plotApplicationRun(GnuplotScript& gp, const CsvTable& t, std::size_t
   const PlyMesh mesh = readPly(run / "mesh.ply");
   const bool curve = t.cell(r, "k") == "1";
   // The view: through the eye point, aimed at the centre of the result.
-  View view;
+  View view = orthographicView(kRotX, kRotZ);
   const std::optional<std::array<double, 3>> eye = problemEye(t, r);
   const auto resultBox = boundingBox(mesh.xyz);
   if (eye && !mesh.xyz.empty())
@@ -258,7 +269,7 @@ Artefact figApplication(const std::string& id, const CsvTable& t,
   gp.command("set pm3d depthorder noborder clip z");
   gp.command("set pm3d lighting primary 0.5 specular 0.2");
   gp.command("unset colorbox");
-  gp.command("set key top right samplen 2");
+  gp.command("set key outside right top samplen 2");
   // One panel per run.
   for (std::size_t p = 0; p < picks.size(); ++p) {
     const std::size_t r = picks[p];

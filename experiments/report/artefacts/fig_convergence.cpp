@@ -32,7 +32,7 @@ GnuplotScript convergenceScript(const std::string& id) {
   gp.command("set format y \"10^{%L}\"");
   gp.command("set xlabel \"h (relative cell size)\"");
   gp.command("set grid");
-  gp.command("set key bottom right font \",8\"");
+  gp.command("set key outside right center vertical font \",8\"");  // beside the panel
   return gp;
 }
 

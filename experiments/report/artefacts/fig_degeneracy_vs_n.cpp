@@ -182,7 +182,8 @@ Artefact figDegeneracyVsN(const std::string& id, const CsvTable& t,
   }
   for (const char* line :
        {"set xlabel \"ambient dimension n\"", "set ylabel \"abnormal cells (% of classified)\"",
-        "set key top left", "set grid", "set xtics 1", "set yrange [0:*]"})
+        "set key outside top center horizontal maxrows 2", "set grid", "set xtics 1",
+        "set yrange [0:*]"})
     plot.gp.command(line);
 
   // Every series, then the paper's points.

@@ -369,8 +369,8 @@ std::string table1Chart(const std::string& id, const std::vector<PaperRow>& pape
   gp.command("set xrange [-0.6:" + formatFixed(paper.size() - 0.4, 1) + "]");
   gp.command("set xtics (" + join(tics, ", ") + ") noenhanced");
   gp.command("set grid ytics");
-  gp.command("set bmargin 4");
-  gp.command("set key top left");
+  gp.command("set bmargin 7");                             // two-line tics, then the key
+  gp.command("set key outside bottom center horizontal");  // below the bars, whatever their height
   gp.command("set style fill solid 0.9 border lc rgb \"#404040\"");
   gp.command("set boxwidth " + formatFixed(width, 3) + " absolute");
   std::vector<std::string> plots;
