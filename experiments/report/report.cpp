@@ -10,7 +10,7 @@
 #include <system_error>
 
 #include "experiments/report/artefacts/common.hpp"
-#include "experiments/view/view.hpp"
+#include "experiments/report/viewer_links.hpp"
 
 namespace ndc::report {
 
@@ -293,7 +293,7 @@ Section artefactSection(const ReportRun& run, const std::string& id,
     body += " Failed runs:\n\n";
     for (const std::string& f : a.failures) body += "- " + f + "\n";
   }
-  body += ndc::view::writeRunViewers(dir / "runs", id + "/runs/");  // a page per run with a mesh
+  body += runViewerLinks(csv, dir / "runs", id + "/runs/");  // a page per run with a mesh
   body += "\n" + filesLine(a, dir);
   section.status = !renderNote.empty() && run.render ? "not rendered"
                    : a.failures.empty()              ? "ok"

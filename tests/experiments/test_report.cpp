@@ -1,11 +1,14 @@
 // The report generator (issue 6): CSV reading, aggregation, Markdown and LaTeX tables generated
 // from hand-written experiment CSVs, failed runs and missing experiments in results/report.md,
-// and bad input (a missing column) as a one-line error that leaves earlier outputs alone.
+// and bad input (a missing column) as a one-line error that leaves earlier outputs alone; the
+// viewer links as one compact table, runs without an expectation counted apart, and lit
+// application figures with their legends off the data (issue 43).
 #include <catch2/catch.hpp>
 
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -13,7 +16,9 @@
 #include <string>
 #include <vector>
 
+#include "experiments/report/perspective.hpp"
 #include "experiments/report/report.hpp"
+#include "experiments/report/viewer_links.hpp"
 #include "framework/problem/problem.hpp"
 #include "tests/test_process.hpp"
 
@@ -649,4 +654,142 @@ TEST_CASE("The conclusion fragment is computed from the results", "[report]") {
   CHECK_THAT(conclusion, Catch::Contains("70.0\\%"));
   CHECK_THAT(conclusion, Catch::Contains("blending (n = 6) 70.0\\%"));
   CHECK_THAT(slurp(results / "report.md"), Catch::Contains("## Conclusion"));
+}
+
+TEST_CASE("Viewer links: one row per problem, a short link per run", "[report]") {
+  std::vector<std::map<std::string, std::string>> rows;
+  for (const std::string problem : {"circle", "torus"})
+    for (const std::string connection : {"paper", "crossing"})
+      rows.push_back({{"run", problem + ".L5." + connection},
+                      {"problem", problem},
+                      {"connection", connection}});
+  const CsvTable csv = parseCsv(experimentCsv("tab-connection", rows), "links.csv");
+  // Every run but torus.L5.paper has a page.
+  const std::string md = viewerLinkTable(
+      csv, [](const std::string& run) { return run != "torus.L5.paper"; }, "tab-connection/runs/");
+  CHECK_THAT(md, Catch::Contains("(`ndcontour view`, 3 pages):\n\n| problem | 3-D views |\n"));
+  CHECK_THAT(md, Catch::Contains("| circle | [paper](tab-connection/runs/circle.L5.paper/view.html)"
+                                 " · [crossing](tab-connection/runs/circle.L5.crossing/"
+                                 "view.html) |\n"));
+  CHECK_THAT(md, Catch::Contains("| torus | [crossing](tab-connection/runs/torus.L5.crossing/"
+                                 "view.html) |\n"));
+  // The link texts are the varying settings, never the long run ids.
+  CHECK(md.find("[circle.L5") == std::string::npos);
+  CHECK(viewerLinkTable(
+            csv, [](const std::string&) { return false; }, "x/")
+            .empty());
+
+  // Depths and jitter seeds tell runs apart too; a lone run per problem is a plain "view".
+  const CsvTable depths =
+      parseCsv(experimentCsv("fig-convergence",
+                             {{{"run", "a4"}, {"problem", "a"}, {"depth", "4"}},
+                              {{"run", "a5"}, {"problem", "a"}, {"depth", "5"}},
+                              {{"run", "a5j1"}, {"problem", "a"}, {"depth", "5"}, {"seed", "1"}}}),
+               "depths.csv");
+  CHECK_THAT(viewerLinkTable(
+                 depths, [](const std::string&) { return true; }, ""),
+             Catch::Contains("| a | [L4](a4/view.html) · [L5](a5/view.html) · "
+                             "[L5 j1](a5j1/view.html) |"));
+  const CsvTable one = parseCsv(experimentCsv("x", {{{"run", "b1"}, {"problem", "b"}}}), "one.csv");
+  CHECK_THAT(viewerLinkTable(
+                 one, [](const std::string&) { return true; }, "x/runs/"),
+             Catch::Contains("| b | [view](x/runs/b1/view.html) |"));
+}
+
+TEST_CASE("tab-connection counts runs without an expectation apart, never as wrong", "[report]") {
+  // a: right; b: Euler characteristic wrong; c: no expectation; d: components only.
+  const auto run = [](std::string name, std::string c, std::string e, std::string gotC,
+                      std::string gotE) {
+    return std::map<std::string, std::string>{{"run", name},
+                                              {"problem", name},
+                                              {"expect_components", c},
+                                              {"expect_euler_characteristic", e},
+                                              {"mesh.components", gotC},
+                                              {"mesh.euler_characteristic", gotE},
+                                              {"mesh.open_ends", "0"},
+                                              {"mesh.boundary_edges", "0"},
+                                              {"mesh.nonmanifold_edges", "0"},
+                                              {"accuracy.max_chord_error", "0.001"}};
+  };
+  const CsvTable csv = parseCsv(
+      experimentCsv("tab-connection", {run("a", "1", "0", "1", "0"), run("b", "1", "2", "1", "0"),
+                                       run("c", "", "", "2", "2"), run("d", "1", "", "1", "4")}),
+      "connection.csv");
+  const Artefact a = buildArtefact("tab-connection", csv, scratch());
+  REQUIRE(a.tables.size() == 2);
+  const std::string scores = toMarkdown(a.tables[0]);
+  CHECK_THAT(scores,
+             Catch::Contains("| crossing | 4 | 0 | 3/3 (100%), 1 not comparable | "
+                             "1/2 (50%), 2 not comparable | 1/2 (50%), 2 not comparable |"));
+  // Per problem: the run without an expectation is not marked wrong.
+  const std::string detail = toMarkdown(a.tables[1]);
+  CHECK_THAT(detail, Catch::Contains("| c | 2 | 1 | ? / ? | 2 / 2 |"));
+  CHECK_THAT(detail, Catch::Contains("| b | 2 | 1 | 1 / 2 | 1 / 0 * |"));
+  REQUIRE_FALSE(a.sentences.empty());
+  CHECK_THAT(a.sentences[0], Catch::Contains("`crossing` 1 of 2 (2 not comparable)"));
+}
+
+TEST_CASE("Application figures are lit and free of stripes; legends sit off the data", "[report]") {
+  // A triangle's pm3d grid a b / c m: m, the midpoint of b and c, gives lighting a normal.
+  ndc::PlyMesh triangle;
+  triangle.xyz = {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}};
+  triangle.simplices = {{0, 1, 2}};
+  const View front = orthographicView(90, 0);  // gnuplot's `set view 90, 0`: from -y
+  CHECK(front.toViewer[1] == Approx(-1));
+  CHECK(std::abs(front.toViewer[0]) + std::abs(front.toViewer[2]) < 1e-12);
+  using Rows = std::vector<std::vector<double>>;
+  CHECK(trianglePm3d(triangle, front) ==
+        Rows{{0, 0, 0}, {2, 0, 0}, {}, {0, 2, 0}, {1, 1, 0}, {}, {}});
+  // Pushed back: away from the viewer along the view direction, the same place in the picture.
+  const std::vector<double> pushed = trianglePm3d(triangle, front, 0.5)[0];
+  CHECK(pushed[0] == Approx(0).margin(1e-12));
+  CHECK(pushed[1] == Approx(0.5));
+  CHECK(pushed[2] == Approx(0).margin(1e-12));
+
+  // The report's figure of a surface result: lit, depth-sorted, the legend outside.
+  const fs::path dir = scratch() / "application-lit" / "results" / "fig-app-patch";
+  spit(dir / "runs" / "patch.L5" / "mesh.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+       "property double z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+       "0 0 0\n2 0 0\n0 2 0\n3 0 1 2\n");
+  std::map<std::string, std::string> row = {{"run", "patch.L5"},
+                                            {"problem", "patch"},
+                                            {"n", "3"},
+                                            {"k", "2"},
+                                            {"mesh.vertices", "3"},
+                                            {"mesh.components", "1"},
+                                            {"mesh.euler_characteristic", "1"},
+                                            {"mesh.boundary_edges", "3"},
+                                            {"mesh.nonmanifold_edges", "0"},
+                                            {"accuracy.max_residual", "1e-12"},
+                                            {"timing_s.total", "0.1"}};
+  const Artefact a =
+      buildArtefact("fig-app-patch", parseCsv(experimentCsv("fig-app-patch", {row}), "p.csv"), dir);
+  CHECK_THAT(a.gnuplot, Catch::Contains("set pm3d lighting primary 0.5 specular 0.2"));
+  CHECK_THAT(a.gnuplot, Catch::Contains("set pm3d depthorder noborder"));
+  CHECK_THAT(a.gnuplot, Catch::Contains("set key outside"));
+  CHECK_THAT(a.gnuplot, Catch::Contains("$mesh0 << EOD\n0 0 0\n2 0 0\n\n0 2 0\n1 1 0\n\n\nEOD"));
+
+  // The per-run scripts: every pm3d surface lit, without the borders that drew stripes, and
+  // the legend outside the box.
+  for (const auto& e :
+       fs::directory_iterator(fs::path(NDC_SOURCE_DIR) / "experiments" / "gnuplot")) {
+    const std::string script = slurp(e.path());
+    INFO(e.path().string());
+    CHECK_THAT(script, Catch::Contains("set key outside"));
+    if (script.find("with pm3d") == std::string::npos) continue;
+    CHECK_THAT(script, Catch::Contains("set pm3d lighting primary 0.5 specular 0.2"));
+    CHECK_THAT(script, Catch::Contains("set pm3d depthorder noborder"));
+  }
+  // ...and scripts/ply2dat.sh --pm3d, which feeds them, writes the same grid.
+  const fs::path ply = dir / "runs" / "patch.L5" / "mesh.ply";
+  const std::string command = (fs::path(NDC_SOURCE_DIR) / "scripts" / "ply2dat.sh").string() +
+                              " --pm3d " + ndc::test::quoted(ply.string());
+  std::string out;
+  if (FILE* pipe = popen(command.c_str(), "r")) {
+    char buffer[256];
+    while (std::fgets(buffer, sizeof buffer, pipe)) out += buffer;
+    pclose(pipe);
+  }
+  CHECK(out == "0 0 0\n2 0 0\n\n0 2 0\n1 1 0\n\n\n");
 }

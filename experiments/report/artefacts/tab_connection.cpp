@@ -47,12 +47,22 @@ struct TopologyCheck {
 /// One connection's (and other varying settings') totals over the corpus.
 struct ConnectionScore {
   std::string label;
-  int runs = 0, withExpect = 0, components = 0, euler = 0, both = 0;
-  /// Runs with that value expected (the denominators), and runs of problems without any
-  /// expectation (not comparable: counted apart, never as wrong).
-  int withComponents = 0, withEuler = 0, withBoth = 0, notComparable = 0;
+  int runs = 0, components = 0, euler = 0, both = 0;
+  /// Runs with that value expected (the denominators); the other runs are not comparable,
+  /// counted apart and never as wrong.
+  int withComponents = 0, withEuler = 0, withBoth = 0;
   double boundary = 0, nonmanifold = 0, openEnds = 0;
 };
+
+/// "23/24 (96%), 4 not comparable": `count` right of the `of` runs that expect the value, and
+/// the other runs of `runs`, whose problem does not state it, apart (never counted as wrong).
+std::string rightShare(int count, int of, int runs) {
+  std::string text = of ? std::to_string(count) + "/" + std::to_string(of) + " (" +
+                              formatFixed(100.0 * count / of, 0) + "%)"
+                        : std::string(kDash);
+  if (runs > of) text += ", " + std::to_string(runs - of) + " not comparable";
+  return text;
+}
 
 /// The score table's row of group `g`; adds its score to `scores`.
 std::vector<std::string> connectionScoreRow(const TopologyCheck& check, const Group& g,
@@ -72,11 +82,7 @@ std::vector<std::string> connectionScoreRow(const TopologyCheck& check, const Gr
       s.boundary += t.number(r, "mesh.boundary_edges"_column);
       s.nonmanifold += t.number(r, "mesh.nonmanifold_edges"_column);
     }
-    if (!check.hasExpect(r)) {
-      ++s.notComparable;
-      continue;
-    }
-    ++s.withExpect;
+    if (!check.hasExpect(r)) continue;  // not comparable
     // Each value over the runs that expect it: a problem that states only its components is
     // not wrong about its Euler characteristic.
     const bool hasC = std::isfinite(check.expected(r, kComponents));
@@ -87,17 +93,13 @@ std::vector<std::string> connectionScoreRow(const TopologyCheck& check, const Gr
     s.withBoth += hasC && hasE, s.both += hasC && hasE && c && e;
   }
   const Stats chord = summarize(values(t, ok, "accuracy.max_chord_error"_column));
-  const auto share = [&](int count, int of) {
-    return of ? std::to_string(count) + "/" + std::to_string(of) + " (" +
-                    formatFixed(100.0 * count / of, 0) + "%)"
-              : std::string(kDash);
-  };
   std::vector<std::string> row = g.key;
   for (const std::string& cell :
-       {std::to_string(s.runs), std::to_string(failed), std::to_string(s.notComparable),
-        share(s.components, s.withComponents), share(s.euler, s.withEuler),
-        share(s.both, s.withBoth), formatNumber(s.openEnds), formatNumber(s.boundary),
-        formatNumber(s.nonmanifold), formatNumber(chord.median, 2), formatNumber(chord.max, 2)})
+       {std::to_string(s.runs), std::to_string(failed),
+        rightShare(s.components, s.withComponents, s.runs),
+        rightShare(s.euler, s.withEuler, s.runs), rightShare(s.both, s.withBoth, s.runs),
+        formatNumber(s.openEnds), formatNumber(s.boundary), formatNumber(s.nonmanifold),
+        formatNumber(chord.median, 2), formatNumber(chord.max, 2)})
     row.push_back(cell);
   scores.push_back(s);
   return row;
@@ -110,16 +112,17 @@ Table connectionScoreTable(const std::string& id, const TopologyCheck& check,
   Table table;
   table.id = id;
   table.caption =
-      "Connections over the corpus: runs (failed; not comparable: the problem states no "
-      "topology), share of the runs that expect the components, the Euler characteristic "
-      "and both that get them right (a failed run counts as wrong), total open ends, "
-      "boundary and non-manifold edges, median and largest chord error.";
+      "Connections over the corpus: runs (failed), share of the runs that expect the "
+      "components, the Euler characteristic and both that get them right (a failed run counts "
+      "as wrong; runs whose problem does not state the value are not comparable and counted "
+      "apart), total open ends, boundary and non-manifold edges, median and largest chord "
+      "error.";
   table.columns = keys;
-  for (std::string c : {"runs", "failed", "not comparable", "components right", "Euler right",
-                        "both right", "open ends", "boundary edges", "non-manifold edges",
-                        "median chord error", "max chord error"})
+  for (std::string c :
+       {"runs", "failed", "components right", "Euler right", "both right", "open ends",
+        "boundary edges", "non-manifold edges", "median chord error", "max chord error"})
     table.columns.push_back(c);
-  table.align = std::string(keys.size(), 'l') + "rrrrrrrrrrr";
+  table.align = std::string(keys.size(), 'l') + "rrrrrrrrrr";
   for (const Group& g : groupBy(check.t, keys))
     table.rows.push_back(connectionScoreRow(check, g, scores));
   return table;
@@ -146,7 +149,9 @@ std::string connectionCell(const TopologyCheck& check, const std::vector<std::si
         (std::isfinite(check.expected(r, kEuler)) && !check.right(r, kEuler));
     if (check.hasExpect(r) && wrong) text += " *";
   }
-  if (runs.size() > 1) {
+  if (runs.size() > 1 && !check.hasExpect(r)) {
+    text += " (" + std::to_string(runs.size()) + " not comparable)";
+  } else if (runs.size() > 1) {
     int good = 0;
     for (std::size_t x : runs) good += check.right(x, kComponents) && check.right(x, kEuler);
     text += " (" + std::to_string(good) + "/" + std::to_string(runs.size()) + " right)";
@@ -171,7 +176,8 @@ Table connectionDetailTable(const std::string& id, const TopologyCheck& check,
   detail.caption =
       "Per problem: components / Euler characteristic of each connection (b: "
       "boundary edges, nm: non-manifold edges when not 0; * marks a wrong "
-      "topology; runs over several seeds show how many were right).";
+      "topology; runs over several seeds show how many were right; expected ?: the problem "
+      "does not state it, not comparable).";
   detail.columns = rowKeys;
   detail.columns.insert(detail.columns.begin() + 1, {"n", "k", "expected"});
   for (const std::string& c : connections) detail.columns.push_back(c);
@@ -202,8 +208,10 @@ std::vector<std::string> connectionSentences(const std::vector<ConnectionScore>&
   std::vector<std::string> parts;
   for (const ConnectionScore& s : scores)
     if (s.withBoth)
-      parts.push_back("`" + s.label + "` " + std::to_string(s.both) + " of " +
-                      std::to_string(s.withBoth));
+      parts.push_back(
+          "`" + s.label + "` " + std::to_string(s.both) + " of " + std::to_string(s.withBoth) +
+          (s.runs > s.withBoth ? " (" + std::to_string(s.runs - s.withBoth) + " not comparable)"
+                               : ""));
   if (!parts.empty())
     sentences.push_back("Runs with both the components and the Euler characteristic right: " +
                         join(parts, ", ") + ".");
