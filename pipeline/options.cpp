@@ -88,11 +88,12 @@ void validateSolveOptions(SolveOptions& o) {
   }
 
   // An existing output must be a directory; the pipeline decides what it may overwrite.
-  if (!o.outDir && (o.ascii || o.cells || o.vtk || o.obj))
-    throw UsageError(std::string(o.ascii   ? "--ascii"
-                                 : o.cells ? "--cells"
-                                 : o.vtk   ? "--vtk"
-                                           : "--obj") +
+  if (!o.outDir && (o.ascii || o.cells || o.vtk || o.legacyVtk || o.obj))
+    throw UsageError(std::string(o.ascii       ? "--ascii"
+                                 : o.cells     ? "--cells"
+                                 : o.vtk       ? "--vtk"
+                                 : o.legacyVtk ? "--vtk-legacy"
+                                               : "--obj") +
                      " needs --out DIR (it chooses the files written there)");
   if (o.outDir) {
     std::error_code ec;

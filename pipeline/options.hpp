@@ -25,12 +25,13 @@ struct SolveOptions {
   std::optional<double> tolerance;    ///< `--tolerance h`: the chord error target (settings)
   /// `--out DIR`: write summary.json, mesh.ply, singular.csv (and cells.csv with `--cells`)
   std::optional<std::string> outDir;
-  bool ascii = false;     ///< `--ascii`: the PLY files of `--out` as ASCII (else binary) PLY
-  bool cells = false;     ///< `--cells`: also write cells.csv into `--out`
-  bool vtk = false;       ///< `--vtk`: also write mesh.vtu into `--out`
-  bool obj = false;       ///< `--obj`: also write mesh.obj into `--out`
-  bool json = false;      ///< `--json`: the summary on standard output, nothing else
-  std::string maxMemory;  ///< `--max-memory SIZE` as given (parsed into settings)
+  bool ascii = false;      ///< `--ascii`: the PLY files of `--out` as ASCII (else binary) PLY
+  bool cells = false;      ///< `--cells`: also write cells.csv into `--out`
+  bool vtk = false;        ///< `--vtk`: also write mesh.vtu into `--out`
+  bool legacyVtk = false;  ///< `--vtk-legacy`: also write mesh.vtk into `--out`
+  bool obj = false;        ///< `--obj`: also write mesh.obj into `--out`
+  bool json = false;       ///< `--json`: the summary on standard output, nothing else
+  std::string maxMemory;   ///< `--max-memory SIZE` as given (parsed into settings)
   /// `--check`: exit with kExitExpectMismatch when the mesh differs from the problem's `[expect]`.
   bool check = false;
   /// `--domain lo:hi,..`: solve on this box instead of the problem's domain (docs/split.md).

@@ -478,6 +478,7 @@ void describeRun(Summary& summary, const Problem& problem, const Settings& setti
   summary.problem = problem.name;
   summary.n = problem.n();
   summary.k = problem.k();
+  summary.variables = problem.variables;
   summary.settings = settings;
   summary.settings.precisionBits = precisionBits;
   summary.settings.threads = effectiveThreads(settings.threads);

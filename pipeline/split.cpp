@@ -86,7 +86,8 @@ void readUncertified(const std::string& csv, int n, int levels, std::vector<Unce
     std::vector<std::string> field;
     std::stringstream row(line);
     for (std::string f; std::getline(row, f, ',');) field.push_back(f);
-    if (field.size() != static_cast<std::size_t>(3 + 2 * n) || field[0] != "cell") continue;
+    // The contract's columns first; the variables' names may follow (aliases of lo and hi).
+    if (field.size() < static_cast<std::size_t>(3 + 2 * n) || field[0] != "cell") continue;
     UncertifiedCell cell;
     cell.level = std::atoi(field[1].c_str()) + levels;
     cell.reason = field[2];

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian packages ndcontour needs, and nothing when they are all present; then the
 # npm packages of the viewer page (experiments/view/web: three.js, pinned in its package-lock.json)
-# with `npm ci`, skipped when node_modules already holds exactly the locked versions.
+# with `npm ci`, skipped when node_modules already holds exactly the locked versions. ParaView
+# (paraview, python3-paraview: pvpython) is for the test that opens mesh.vtu in ParaView.
 # Usage: scripts/setup.sh [--tex] [--bench] [--slurm]
 #   --tex    also installs TeX for the `paper` target
 #   --bench  also installs CGAL, GUDHI, numpy and scipy for the peer benchmark in bench/ (bench/run.sh)
@@ -15,7 +16,9 @@ packages=(
   catch2 doxygen gnuplot-nox libtomlplusplus-dev libcli11-dev libbenchmark-dev
   clang libclang-rt-14-dev
   python3 python3-dev pybind11-dev python3-numpy python3-pytest python3-meshio python3-scipy python3-skimage
+  zlib1g-dev
   chromium
+  paraview python3-paraview
 )
 # node and npm for `npm ci` below, from Debian only where the machine has no npm.
 if ! command -v npm >/dev/null 2>&1; then

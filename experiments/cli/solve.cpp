@@ -209,6 +209,7 @@ int reportSolve(const SolveOptions& options, const Problem& problem, RunResult& 
     output.format = options.ascii ? PlyFormat::ascii : PlyFormat::binary;
     output.cells = options.cells;
     output.vtk = options.vtk;
+    output.legacyVtk = options.legacyVtk;
     output.obj = options.obj;
     written = writeOutputs(*options.outDir, result, output);
   }

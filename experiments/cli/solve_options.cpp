@@ -115,13 +115,18 @@ void addSolveOptions(CLI::App& solve, SolveOptions& o) {
       ->type_name("DIR");
   solve.add_flag("--ascii", o.ascii,
                  "Write the PLY files of --out (mesh.ply; input.ply, ruled.ply of applications) "
-                 "as ASCII PLY instead of binary little-endian PLY");
+                 "as ASCII PLY instead of binary little-endian PLY, and mesh.vtu with ASCII "
+                 "instead of zlib-compressed binary data");
   solve.add_flag("--cells", o.cells,
                  "Also write cells.csv to --out: one row per solution cell (index, centre, "
                  "class, projected point)");
   solve.add_flag("--vtk", o.vtk,
                  "Also write mesh.vtu to --out: VTK XML for ParaView and meshio, with the "
-                 "coordinates u0.. in R^n, the cell class and the singular and uncertified flags");
+                 "coordinates u0.. in R^n (also under the variables' names), the cell class and "
+                 "the singular and uncertified flags");
+  solve.add_flag("--vtk-legacy", o.legacyVtk,
+                 "Also write mesh.vtk to --out: legacy VTK (ASCII) with the arrays of mesh.vtu, "
+                 "which meshio reads curves from as well as surfaces");
   solve.add_flag("--obj", o.obj,
                  "Also write mesh.obj to --out: Wavefront OBJ (f records, or l for curves)");
   solve

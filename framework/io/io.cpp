@@ -17,6 +17,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <memory>
 #include <span>
 #include <sstream>
@@ -28,6 +29,7 @@
 #include <vector>
 
 #include "framework/io/summary_schema.hpp"
+#include "framework/io/variable_names.hpp"
 #include "framework/io/vertex_rows.hpp"
 #include "framework/problem/problem.hpp"
 #include "framework/util/errors.hpp"
@@ -45,7 +47,7 @@ std::string number(double v) {
 /// Paths an interrupt must remove: the staging folder of writeOutputs and its files, kept as
 /// plain character arrays so that the signal handler only calls unlink, rmdir and _exit.
 struct InterruptCleanup {
-  static constexpr std::size_t kPaths = 8, kLength = 4096;
+  static constexpr std::size_t kPaths = 12, kLength = 4096;  // every output file
   std::array<std::array<char, kLength>, kPaths> files{};
   std::array<char, kLength> folder{};
   volatile sig_atomic_t count = 0;
@@ -108,6 +110,12 @@ class BlockInterrupts {
 std::string numberList(const std::vector<double>& values) {
   std::string out = "[";
   for (std::size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + number(values[i]);
+  return out + "]";
+}
+
+std::string stringList(const std::vector<std::string>& values) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + jsonQuoted(values[i]);
   return out + "]";
 }
 
@@ -269,6 +277,7 @@ class SummaryWriter {
     if (const double* x = std::get_if<double>(&v)) o_ << number(*x);
     if (const std::string* t = std::get_if<std::string>(&v)) o_ << jsonQuoted(*t);
     if (const auto* list = std::get_if<std::vector<double>>(&v)) o_ << numberList(*list);
+    if (const auto* list = std::get_if<std::vector<std::string>>(&v)) o_ << stringList(*list);
     if (const SummaryJson* json = std::get_if<SummaryJson>(&v)) o_ << json->text;
   }
 
@@ -332,6 +341,13 @@ void meshHeader(std::ostream& out, const RunResult& r, const VertexRows& rows, P
   if (app)
     out << "comment application " << app->name
         << ": x y z is the image in R^3, u0.. the surface parameters\n";
+  // The variables' names of u0 .. (an extension: x y z are taken by the 3-D image).
+  const std::vector<std::string> names = variableNames(r);
+  if (!names.empty()) {
+    out << "comment variables";
+    for (const std::string& name : names) out << ' ' << name;
+    out << "\n";
+  }
   out << "element vertex " << rows.count() << "\n";
   out << "property double x\nproperty double y\nproperty double z\n";
   for (int j = 0; j < r.n; ++j) out << "property double u" << j << "\n";
@@ -389,56 +405,112 @@ void writePly(std::ostream& out, const RunResult& r, PlyFormat format) {
     binaryMeshBody(out, r, rows);
 }
 
+namespace {
+
+/// The header names `prefix0 .. prefix{n-1}`.
+std::vector<std::string> numbered(const std::string& prefix, int n) {
+  std::vector<std::string> names;
+  for (int j = 0; j < n; ++j) names.push_back(prefix + std::to_string(j));
+  return names;
+}
+
+/// Writes `names` as CSV header cells, each after a comma.
+void headerCells(std::ostream& out, const std::vector<std::string>& names) {
+  for (const std::string& name : names) out << ',' << name;
+}
+
+/// Concatenates header name lists.
+std::vector<std::string> joined(std::initializer_list<std::vector<std::string>> lists) {
+  std::vector<std::string> all;
+  for (const auto& list : lists) all.insert(all.end(), list.begin(), list.end());
+  return all;
+}
+
+}  // namespace
+
 void writeCellsCsv(std::ostream& out, const RunResult& r) {
+  // The contract's columns, then the variables' names as aliases of i, c and p (i_x, c_x, p_x).
+  const auto i = numbered("i", r.n), c = numbered("c", r.n), p = numbered("p", r.n);
+  const auto taken = joined({{"cell", "class"}, i, c, p});
+  auto aliases = aliasNames(r, "i_", taken);
+  const auto ca = aliasNames(r, "c_", taken), pa = aliasNames(r, "p_", taken);
+  if (ca.empty() || pa.empty()) aliases.clear();
   out << "cell";
-  for (int j = 0; j < r.n; ++j) out << ",i" << j;
-  for (int j = 0; j < r.n; ++j) out << ",c" << j;
+  headerCells(out, i);
+  headerCells(out, c);
   out << ",class";
-  for (int j = 0; j < r.n; ++j) out << ",p" << j;
+  headerCells(out, p);
+  if (!aliases.empty()) headerCells(out, joined({aliases, ca, pa}));
   out << '\n';
   // Centres and points in the documented coordinates: knot parameters for B-spline variables.
   const auto at = [&](int j, double x) {
     return r.application ? r.application->parameter(j, x) : x;
   };
-  for (std::size_t c = 0; c < r.cellClass.size(); ++c) {
-    out << c;
-    for (int j = 0; j < r.n; ++j) out << ',' << r.cellIndex[c * r.n + j];
-    for (int j = 0; j < r.n; ++j) out << ',' << number(at(j, r.cellCentre[c * r.n + j]));
-    out << ',' << className(r.cellClass[c]);
-    for (int j = 0; j < r.n; ++j) out << ',' << number(at(j, r.cellPoint[c * r.n + j]));
+  for (std::size_t cell = 0; cell < r.cellClass.size(); ++cell) {
+    std::ostringstream index, centre, point;
+    for (int j = 0; j < r.n; ++j) {
+      index << ',' << r.cellIndex[cell * r.n + j];
+      centre << ',' << number(at(j, r.cellCentre[cell * r.n + j]));
+      point << ',' << number(at(j, r.cellPoint[cell * r.n + j]));
+    }
+    out << cell << index.str() << centre.str() << ',' << className(r.cellClass[cell])
+        << point.str();
+    if (!aliases.empty()) out << index.str() << centre.str() << point.str();
     out << '\n';
   }
 }
 
 void writeSingularCsv(std::ostream& out, const RunResult& r) {
+  // The contract's columns, then the variables' names as aliases of u0 ...
+  const auto u = numbered("u", r.n);
+  const auto aliases = aliasNames(r, "", joined({{"point", "sigma_min"}, u}));
   out << "point,sigma_min";
-  for (int j = 0; j < r.n; ++j) out << ",u" << j;
+  headerCells(out, u);
+  headerCells(out, aliases);
   out << '\n';
   for (std::size_t i = 0; i < r.summary.singularPoints.size(); ++i) {
     const SingularPoint& p = r.summary.singularPoints[i];
-    out << i << ',' << number(p.sigmaMin);
+    std::ostringstream coordinates;
     for (int j = 0; j < r.n; ++j)
-      out << ',' << (static_cast<std::size_t>(j) < p.point.size() ? number(p.point[j]) : "");
+      coordinates << ','
+                  << (static_cast<std::size_t>(j) < p.point.size() ? number(p.point[j]) : "");
+    out << i << ',' << number(p.sigmaMin) << coordinates.str();
+    if (!aliases.empty()) out << coordinates.str();
     out << '\n';
   }
 }
 
 void writeUncertifiedCsv(std::ostream& out, const RunResult& r) {
+  // The contract's columns, then the variables' names as aliases of lo and hi (lo_x, hi_x).
+  std::vector<std::string> bounds;
+  for (int j = 0; j < r.n; ++j) {
+    bounds.push_back("lo" + std::to_string(j));
+    bounds.push_back("hi" + std::to_string(j));
+  }
+  const auto taken = joined({{"kind", "level", "reason"}, bounds});
+  const auto lo = aliasNames(r, "lo_", taken), hi = aliasNames(r, "hi_", taken);
+  const bool alias = !lo.empty() && !hi.empty();
   out << "kind,level,reason";
-  for (int j = 0; j < r.n; ++j) out << ",lo" << j << ",hi" << j;
+  headerCells(out, bounds);
+  for (std::size_t j = 0; alias && j < lo.size(); ++j) out << ',' << lo[j] << ',' << hi[j];
   out << '\n';
+  const auto row = [&](const std::string& head, const std::vector<std::string>& box) {
+    std::string cells;
+    for (const std::string& v : box) cells += ',' + v;
+    out << head << cells << (alias ? cells : std::string()) << '\n';
+  };
   for (const UncertifiedCell& c : r.summary.topology.uncertified) {
-    out << "cell," << c.level << ',' << c.reason;
-    for (int j = 0; j < r.n; ++j) out << ',' << number(c.lo[j]) << ',' << number(c.hi[j]);
-    out << '\n';
+    std::vector<std::string> box;
+    for (int j = 0; j < r.n; ++j) box.insert(box.end(), {number(c.lo[j]), number(c.hi[j])});
+    row("cell," + std::to_string(c.level) + ',' + c.reason, box);
   }
   for (const SingularPoint& p : r.summary.singularPoints) {
-    out << "singular_point,,sigma_min=" << number(p.sigmaMin);
+    std::vector<std::string> box;
     for (int j = 0; j < r.n; ++j) {
       const std::string v = static_cast<std::size_t>(j) < p.point.size() ? number(p.point[j]) : "";
-      out << ',' << v << ',' << v;
+      box.insert(box.end(), {v, v});
     }
-    out << '\n';
+    row("singular_point,,sigma_min=" + number(p.sigmaMin), box);
   }
 }
 
@@ -565,7 +637,8 @@ OutputFiles formatOutputs(const RunResult& result, const OutputOptions& options)
   };
   const PlyFormat format = options.format;
   add("mesh.ply", [&](std::ostream& o) { writePly(o, result, format); });
-  if (options.vtk) add("mesh.vtu", [&](std::ostream& o) { writeVtk(o, result); });
+  if (options.vtk) add("mesh.vtu", [&](std::ostream& o) { writeVtk(o, result, format); });
+  if (options.legacyVtk) add("mesh.vtk", [&](std::ostream& o) { writeLegacyVtk(o, result); });
   if (options.obj) add("mesh.obj", [&](std::ostream& o) { writeObj(o, result); });
   if (options.cells) add("cells.csv", [&](std::ostream& o) { writeCellsCsv(o, result); });
   add("singular.csv", [&](std::ostream& o) { writeSingularCsv(o, result); });
@@ -658,8 +731,8 @@ std::vector<std::string> Staging::publish(const OutputFiles& files) const {
   };
   std::error_code error;
   // view.html is `ndcontour view`'s page of the previous run: it would show the old mesh.
-  for (const char* name : {"summary.json", "cells.csv", "mesh.vtu", "mesh.obj", "input.ply",
-                           "ruled.ply", "uncertified.csv", "view.html"})
+  for (const char* name : {"summary.json", "cells.csv", "mesh.vtu", "mesh.vtk", "mesh.obj",
+                           "input.ply", "ruled.ply", "uncertified.csv", "view.html"})
     if (std::string(name) == "summary.json" || !written(name)) {
       std::filesystem::remove(dir_ / name, error);
       if (error) abandon((dir_ / name).string() + ": cannot remove the previous output");

@@ -36,11 +36,19 @@ void writeRuledPly(std::ostream& out, const RunResult& result,
 
 /// Writes the mesh as VTK XML, an `UnstructuredGrid` for ParaView and meshio (`mesh.vtu`,
 /// `--vtk`): the points `x y z` of mesh.ply, triangles (k = 2) or lines (k = 1), the point data
-/// `u0 .. u{n-1}` (and `x2 y2 z2`) and `singular` (1 at the vertex nearest to a located singular
-/// point, within one edge length), the cell data
-/// `class` (of the base solution cell holding the simplex: 0 normal, 1 abnormal, 2 failed, -1
-/// none) and `uncertified` (1 inside a cell of uncertified.csv). ASCII data.
-void writeVtk(std::ostream& out, const RunResult& result);
+/// `u0 .. u{n-1}` (and `x2 y2 z2`), the same coordinates once more under the problem's variable
+/// names (where they repeat no other name) and `singular` (1 at the vertex nearest to a located
+/// singular point, within one edge length), the cell data `class` (of the base solution cell
+/// holding the simplex: 0 normal, 1 abnormal, 2 failed, -1 none) and `uncertified` (1 inside a
+/// cell of uncertified.csv). Binary data compressed with zlib (vtkZLibDataCompressor, base64
+/// inline) by default, ASCII data with PlyFormat::ascii (`--ascii`).
+void writeVtk(std::ostream& out, const RunResult& result, PlyFormat format = PlyFormat::binary);
+
+/// Writes the mesh as legacy VTK (`mesh.vtk`, `--vtk-legacy`; `# vtk DataFile Version 4.2`,
+/// ASCII, an UNSTRUCTURED_GRID): the points, cells and arrays of writeVtk, the arrays as FIELD
+/// data. A format that meshio reads curves from besides VTU (its PLY reader knows no `edge`
+/// element and its OBJ reader no `l` record).
+void writeLegacyVtk(std::ostream& out, const RunResult& result);
 
 /// Writes the mesh as Wavefront OBJ (`mesh.obj`, `--obj`): `v x y z` per vertex as in mesh.ply,
 /// then `f a b c` (k = 2) or `l a b` (k = 1) with 1-based vertex numbers.
@@ -70,24 +78,25 @@ void writeAtomically(const std::filesystem::path& target, const std::string& tex
 
 /// What writeOutputs writes besides the files every run has.
 struct OutputOptions {
-  PlyFormat format = PlyFormat::binary;  ///< of mesh.ply, input.ply and ruled.ply (`--ascii`)
-  bool cells = false;                    ///< whether to write cells.csv (`--cells`)
-  bool vtk = false;                      ///< whether to write mesh.vtu (`--vtk`)
-  bool obj = false;                      ///< whether to write mesh.obj (`--obj`)
+  /// The encoding of mesh.ply, input.ply and ruled.ply, and of mesh.vtu's arrays (`--ascii`).
+  PlyFormat format = PlyFormat::binary;
+  bool cells = false;      ///< whether to write cells.csv (`--cells`)
+  bool vtk = false;        ///< whether to write mesh.vtu (`--vtk`)
+  bool legacyVtk = false;  ///< whether to write mesh.vtk (`--vtk-legacy`)
+  bool obj = false;        ///< whether to write mesh.obj (`--obj`)
 };
 
-/// Writes mesh.ply, mesh.vtu and mesh.obj (only with `options.vtk`, `options.obj`), cells.csv
-/// (only with `options.cells`), singular.csv, uncertified.csv when
-/// the run is not certified (input.ply and ruled.ply for applications that have them) and last
-/// summary.json into `dir` (created if needed); returns the file names written, in that order.
-/// Every file is first written into a hidden staging folder in `dir`
+/// Writes mesh.ply, mesh.vtu, mesh.vtk and mesh.obj (only with `options.vtk`,
+/// `options.legacyVtk`, `options.obj`), cells.csv (only with `options.cells`), singular.csv,
+/// uncertified.csv when the run is not certified (input.ply and ruled.ply for applications that
+/// have them) and last summary.json into `dir` (created if needed); returns the file names
+/// written, in that order. Every file is first written into a hidden staging folder in `dir`
 /// (`.ndcontour-partial-PID`): a full disk or an interrupt there leaves the previous run whole.
 /// Then, with SIGINT and SIGTERM blocked, the previous summary.json is removed and the files
 /// are renamed into place, summary.json (whose presence marks a finished run) last. Throws
 /// ndc::InputError if `dir` cannot be written. A file of an earlier run that this run does not
-/// write (cells.csv without `cells`, mesh.vtu, mesh.obj, input.ply, ruled.ply, uncertified.csv)
-/// is removed: the
-/// folder then holds exactly this run's files.
+/// write (cells.csv without `cells`, mesh.vtu, mesh.vtk, mesh.obj, input.ply, ruled.ply,
+/// uncertified.csv) is removed: the folder then holds exactly this run's files.
 std::vector<std::string> writeOutputs(const std::filesystem::path& dir, const RunResult& result,
                                       const OutputOptions& options = {});
 

@@ -1,16 +1,23 @@
 // The mesh in the formats of other tools (docs/contracts.md 4.4): VTK XML (mesh.vtu, for
 // ParaView and meshio) and Wavefront OBJ (mesh.obj).
+#include <zlib.h>
+
 #include <algorithm>
+#include <bit>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <map>
 #include <ostream>
+#include <stdexcept>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "framework/io/io.hpp"
+#include "framework/io/variable_names.hpp"
 #include "framework/io/vertex_rows.hpp"
 
 namespace ndc {
@@ -127,64 +134,224 @@ std::vector<int> simplexClasses(const RunResult& r) {
   return out;
 }
 
-/// One DataArray of integers.
-void intArray(std::ostream& out, const char* type, const std::string& name,
-              const std::vector<std::int64_t>& values) {
-  out << "        <DataArray type=\"" << type << "\" Name=\"" << name << "\" format=\"ascii\">\n";
-  for (std::size_t i = 0; i < values.size(); ++i) out << values[i] << (i % 16 == 15 ? '\n' : ' ');
-  out << "\n        </DataArray>\n";
+/// The DataArrays of mesh.vtu, ASCII (`--ascii`) or binary: each array's bytes in blocks of
+/// 32 KiB compressed with zlib, after the header of vtkZLibDataCompressor (UInt64: the block
+/// count, the block size, the size of the last block when partial, then each compressed size),
+/// header and blocks in base64 apart, as VTK writes them. An empty array is written as ASCII
+/// (an empty binary array has no blocks, which some readers refuse).
+class VtkArrays {
+ public:
+  VtkArrays(std::ostream& out, PlyFormat format) : out_(out), ascii_(format == PlyFormat::ascii) {}
+
+  /// One DataArray of `values` (Float64, Int32, Int64 or UInt8 as `type` says); `name` empty
+  /// for none; `components` per tuple.
+  template <class T>
+  void write(const char* type, const std::string& name, const std::vector<T>& values,
+             int components = 1) {
+    const bool ascii = ascii_ || values.empty();
+    out_ << "        <DataArray type=\"" << type << '"';
+    if (!name.empty()) out_ << " Name=\"" << name << '"';
+    if (components != 1) out_ << " NumberOfComponents=\"" << components << '"';
+    out_ << " format=\"" << (ascii ? "ascii" : "binary") << "\">\n";
+    if (ascii)
+      text(values, components);
+    else
+      binary(values.data(), values.size() * sizeof(T));
+    out_ << "\n        </DataArray>\n";
+  }
+
+ private:
+  /// ASCII values, `components` per tuple and a few tuples per line.
+  template <class T>
+  void text(const std::vector<T>& values, int components) {
+    const std::size_t line = components == 1 ? 8 : static_cast<std::size_t>(components);
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      if constexpr (std::is_floating_point_v<T>)
+        put(out_, values[i]);
+      else
+        out_ << static_cast<std::int64_t>(values[i]);
+      out_ << (i % line == line - 1 ? '\n' : ' ');
+    }
+  }
+
+  /// The bytes compressed in blocks, header and data each in base64.
+  void binary(const void* data, std::size_t size) {
+    const auto* bytes = static_cast<const unsigned char*>(data);
+    const std::size_t blocks = (size + kBlock - 1) / kBlock;
+    std::vector<std::uint64_t> header = {blocks, kBlock, size % kBlock};
+    std::vector<unsigned char> packed;
+    std::vector<unsigned char> block(compressBound(kBlock));
+    for (std::size_t b = 0; b < blocks; ++b) {
+      // Block b: zlib at its fastest level (doubles of coordinates shrink by about a tenth at
+      // any level; the default level takes twice the time for 1 % more).
+      const std::size_t length = std::min(kBlock, size - b * kBlock);
+      uLongf written = static_cast<uLongf>(block.size());
+      if (compress2(block.data(), &written, bytes + b * kBlock, static_cast<uLong>(length),
+                    Z_BEST_SPEED) != Z_OK)
+        throw std::runtime_error("mesh.vtu: zlib could not compress a block");
+      header.push_back(written);
+      packed.insert(packed.end(), block.begin(),
+                    block.begin() + static_cast<std::ptrdiff_t>(written));
+    }
+    out_ << "          ";
+    base64(reinterpret_cast<const unsigned char*>(header.data()), header.size() * 8);
+    base64(packed.data(), packed.size());
+  }
+
+  /// `size` bytes in base64 (RFC 4648, padded).
+  void base64(const unsigned char* p, std::size_t size) {
+    static constexpr char kDigits[] =
+        "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string text;
+    text.reserve((size + 2) / 3 * 4);
+    for (std::size_t i = 0; i < size; i += 3) {
+      const std::uint32_t a = p[i], b = i + 1 < size ? p[i + 1] : 0,
+                          c = i + 2 < size ? p[i + 2] : 0;
+      const std::uint32_t word = a << 16 | b << 8 | c;
+      text += kDigits[word >> 18 & 63];
+      text += kDigits[word >> 12 & 63];
+      text += i + 1 < size ? kDigits[word >> 6 & 63] : '=';
+      text += i + 2 < size ? kDigits[word & 63] : '=';
+    }
+    out_ << text;
+  }
+
+  static constexpr std::size_t kBlock = std::size_t{1} << 15;
+  std::ostream& out_;
+  bool ascii_;
+};
+
+/// The point-data arrays of the coordinates, each a name and its column of VertexRows: the
+/// contract's `u0 ..` and `x2 y2 z2`, then the variables' names as aliases of `u0 ..` where
+/// none repeats a name of the file.
+std::vector<std::pair<std::string, std::size_t>> coordinateArrays(const RunResult& r, bool second) {
+  std::vector<std::pair<std::string, std::size_t>> arrays;
+  std::vector<std::string> taken = {"singular", "class", "uncertified"};
+  for (int j = 0; j < r.n + (second ? 3 : 0); ++j) {
+    const std::string name =
+        j < r.n ? "u" + std::to_string(j) : std::string(1, "xyz"[j - r.n]) + "2";
+    arrays.emplace_back(name, 3 + j);
+    taken.push_back(name);
+  }
+  const std::vector<std::string> aliases = aliasNames(r, "", taken);
+  for (std::size_t j = 0; j < aliases.size(); ++j) arrays.emplace_back(aliases[j], 3 + j);
+  return arrays;
 }
 
-std::vector<std::int64_t> widen(const std::vector<int>& v) { return {v.begin(), v.end()}; }
+/// The `<!-- -->` line of mesh.vtu: where its numbers come from.
+std::string vtkComment(const RunResult& r) {
+  std::string line = "<!-- ndcontour " + std::string(NDC_VERSION) + " problem " +
+                     r.summary.problem + ": points are x y z as in mesh.ply; u0.. the " +
+                     "coordinates in R^n";
+  const std::vector<std::string> names = variableNames(r);
+  if (!names.empty()) {
+    line += ", also named";
+    for (const std::string& name : names) line += ' ' + name;
+  }
+  return line + " -->\n";
+}
 
 }  // namespace
 
-void writeVtk(std::ostream& out, const RunResult& r) {
+void writeVtk(std::ostream& out, const RunResult& r, PlyFormat format) {
   VertexRows rows(r);
   const std::size_t points = rows.count(), count = simplexCount(r);
   const int width = r.k + 1;
+  const bool little = std::endian::native == std::endian::little;
   out << "<?xml version=\"1.0\"?>\n"
-      << "<!-- ndcontour " << NDC_VERSION << " problem " << r.summary.problem
-      << ": points are x y z as in mesh.ply; u0.. the coordinates in R^n -->\n"
-      << "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
-      << "  <UnstructuredGrid>\n"
+      << vtkComment(r) << "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\""
+      << (little ? "LittleEndian" : "BigEndian") << '"'
+      << (format == PlyFormat::ascii
+              ? ""
+              : " header_type=\"UInt64\" compressor=\"vtkZLibDataCompressor\"")
+      << ">\n  <UnstructuredGrid>\n"
       << "    <Piece NumberOfPoints=\"" << points << "\" NumberOfCells=\"" << count << "\">\n"
       << "      <PointData>\n";
-  // One array per coordinate u_j (and the second image's x2 y2 z2), then the singular flag.
-  const std::size_t columns = rows.width();
-  for (std::size_t c = 3; c < columns; ++c) {
-    const std::size_t j = c - 3;
-    const std::string name = j < static_cast<std::size_t>(r.n)
-                                 ? "u" + std::to_string(j)
-                                 : std::string(1, "xyz"[j - r.n]) + "2";
-    out << "        <DataArray type=\"Float64\" Name=\"" << name << "\" format=\"ascii\">\n";
-    for (std::size_t v = 0; v < points; ++v) {
-      put(out, rows(v)[c]);
-      out << (v % 8 == 7 ? '\n' : ' ');
-    }
-    out << "\n        </DataArray>\n";
-  }
-  intArray(out, "Int32", "singular", widen(singularVertices(r)));
-  out << "      </PointData>\n      <CellData>\n";
-  intArray(out, "Int32", "class", widen(simplexClasses(r)));
-  intArray(out, "Int32", "uncertified", widen(uncertifiedSimplices(r)));
-  out << "      </CellData>\n      <Points>\n"
-      << "        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  VtkArrays arrays(out, format);
+  // The vertex rows by column: x y z, then u0 .. (and x2 y2 z2).
+  std::vector<std::vector<double>> column(rows.width(), std::vector<double>(points));
   for (std::size_t v = 0; v < points; ++v) {
     const auto row = rows(v);
+    for (std::size_t c = 0; c < row.size(); ++c) column[c][v] = row[c];
+  }
+  // One array per coordinate u_j (and the second image's x2 y2 z2), then the variables' names
+  // (the same values as u_j), then the singular flag.
+  for (const auto& [name, c] : coordinateArrays(r, rows.second()))
+    arrays.write("Float64", name, column[c]);
+  arrays.write("Int32", "singular", singularVertices(r));
+  out << "      </PointData>\n      <CellData>\n";
+  arrays.write("Int32", "class", simplexClasses(r));
+  arrays.write("Int32", "uncertified", uncertifiedSimplices(r));
+  out << "      </CellData>\n      <Points>\n";
+  std::vector<double> xyz(3 * points);
+  for (std::size_t v = 0; v < points; ++v)
+    for (int c = 0; c < 3; ++c) xyz[3 * v + c] = column[c][v];
+  arrays.write("Float64", "", xyz, 3);
+  out << "      </Points>\n      <Cells>\n";
+  arrays.write("Int64", "connectivity",
+               std::vector<std::int64_t>(r.simplices.begin(), r.simplices.end()));
+  std::vector<std::int64_t> offsets(count);
+  for (std::size_t s = 0; s < count; ++s) offsets[s] = static_cast<std::int64_t>((s + 1) * width);
+  arrays.write("Int64", "offsets", offsets);
+  arrays.write("UInt8", "types",
+               std::vector<std::uint8_t>(count, r.k == 1 ? 3 : 5));  // LINE, TRIANGLE
+  out << "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
+}
+
+namespace {
+
+/// One FIELD array of a legacy VTK file: its line, then the values, a few per line.
+template <class T>
+void legacyArray(std::ostream& out, const std::string& name, const std::vector<T>& values) {
+  out << name << " 1 " << values.size() << (std::is_floating_point_v<T> ? " double\n" : " int\n");
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if constexpr (std::is_floating_point_v<T>)
+      put(out, values[i]);
+    else
+      out << values[i];
+    out << (i % 8 == 7 || i + 1 == values.size() ? '\n' : ' ');
+  }
+}
+
+}  // namespace
+
+void writeLegacyVtk(std::ostream& out, const RunResult& r) {
+  VertexRows rows(r);
+  const std::size_t points = rows.count(), count = simplexCount(r);
+  const int width = r.k + 1;
+  const std::vector<std::string> names = variableNames(r);
+  // The header: version, title (one line), encoding, dataset.
+  out << "# vtk DataFile Version 4.2\nndcontour " << NDC_VERSION << " problem " << r.summary.problem
+      << ": points x y z as in mesh.ply; u0.. the coordinates in R^n";
+  if (!names.empty()) out << ", also named";
+  for (const std::string& name : names) out << ' ' << name;
+  out << "\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS " << points << " double\n";
+  std::vector<std::vector<double>> column(rows.width(), std::vector<double>(points));
+  for (std::size_t v = 0; v < points; ++v) {
+    const auto row = rows(v);
+    for (std::size_t c = 0; c < row.size(); ++c) column[c][v] = row[c];
     for (int c = 0; c < 3; ++c) {
       put(out, row[c]);
       out << (c == 2 ? '\n' : ' ');
     }
   }
-  out << "        </DataArray>\n      </Points>\n      <Cells>\n";
-  intArray(out, "Int64", "connectivity",
-           std::vector<std::int64_t>(r.simplices.begin(), r.simplices.end()));
-  std::vector<std::int64_t> offsets(count), types(count, r.k == 1 ? 3 : 5);  // VTK_LINE, _TRIANGLE
-  for (std::size_t s = 0; s < count; ++s) offsets[s] = static_cast<std::int64_t>((s + 1) * width);
-  intArray(out, "Int64", "offsets", offsets);
-  intArray(out, "UInt8", "types", types);
-  out << "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
+  // The simplices: each its vertex count and vertices; VTK_LINE or VTK_TRIANGLE.
+  out << "CELLS " << count << ' ' << count * (width + 1) << '\n';
+  for (std::size_t s = 0; s < count; ++s) {
+    out << width;
+    for (int t = 0; t < width; ++t) out << ' ' << r.simplices[s * width + t];
+    out << '\n';
+  }
+  out << "CELL_TYPES " << count << '\n';
+  for (std::size_t s = 0; s < count; ++s) out << (r.k == 1 ? 3 : 5) << '\n';
+  // The arrays of mesh.vtu, by the same names.
+  const auto arrays = coordinateArrays(r, rows.second());
+  out << "POINT_DATA " << points << "\nFIELD FieldData " << arrays.size() + 1 << '\n';
+  for (const auto& [name, c] : arrays) legacyArray(out, name, column[c]);
+  legacyArray(out, "singular", singularVertices(r));
+  out << "CELL_DATA " << count << "\nFIELD FieldData 2\n";
+  legacyArray(out, "class", simplexClasses(r));
+  legacyArray(out, "uncertified", uncertifiedSimplices(r));
 }
 
 void writeObj(std::ostream& out, const RunResult& r) {

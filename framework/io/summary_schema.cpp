@@ -8,13 +8,14 @@ namespace ndc {
 
 const SummaryField* summaryFieldOf(std::string_view path) {
   // Walk the path's parts from the top: below a list a part (an index) is its element `[]`,
-  // below a map a part (a key) is its value `*`; below a number list or JSON text the field
-  // ends.
+  // below a map a part (a key) is its value `*`; below a list of numbers or strings or JSON
+  // text the field ends.
   std::string pattern;
   const SummaryField* field = nullptr;
   std::size_t at = 0;
   while (at <= path.size()) {
-    if (field && (field->type == SummaryType::numberList || field->type == SummaryType::json))
+    if (field && (field->type == SummaryType::numberList ||
+                  field->type == SummaryType::stringList || field->type == SummaryType::json))
       return field;
     const std::size_t dot = std::min(path.find('.', at), path.size());
     const std::string_view part = path.substr(at, dot - at);

@@ -28,6 +28,7 @@ enum class SummaryType {
   number,      ///< a number (`%.17g`; null when not finite)
   boolean,     ///< true or false
   numberList,  ///< an array of numbers
+  stringList,  ///< an array of strings
   json         ///< JSON text written as it is (a strategy's parameters)
 };
 
@@ -46,10 +47,11 @@ struct SummaryKeys {
 };
 
 /// The value of one field in one run, as the writer writes it: null, absent, a boolean, an
-/// integer, a number, a string, a list of numbers, JSON text, or the elements of a container.
-using SummaryValue =
-    std::variant<std::nullptr_t, SummaryAbsent, bool, std::int64_t, std::uint64_t, double,
-                 std::string, std::vector<double>, SummaryJson, SummaryKeys>;
+/// integer, a number, a string, a list of numbers or of strings, JSON text, or the elements of a
+/// container.
+using SummaryValue = std::variant<std::nullptr_t, SummaryAbsent, bool, std::int64_t, std::uint64_t,
+                                  double, std::string, std::vector<double>,
+                                  std::vector<std::string>, SummaryJson, SummaryKeys>;
 
 /// Where a field starts in the text of summary.json.
 enum class SummaryLayout {
@@ -101,6 +103,10 @@ inline constexpr SummaryField kSummaryFields[] = {
      0, kInline, [](S s, I) -> Value { return std::int64_t{s.n}; }},
     {"k", T::integer, false, false, "the dimension of M: 1 curve, 2 surface", 0, kInline,
      [](S s, I) -> Value { return std::int64_t{s.k}; }},
+    {"variables", T::stringList, false, true,
+     "the problem's variable names, one per coordinate; absent where the run has none", 0,
+     kInline, [](S s, I) -> Value {
+       return s.variables.empty() ? Value(SummaryAbsent{}) : Value(s.variables); }},
     // settings
     {"settings", T::object, false, false, "the strategies and parameters of the run", 0, kInline,
      nullptr},
@@ -325,8 +331,8 @@ using summary_schema::kSummaryFields;
 
 /// The field of a concrete dotted path of a summary (`diagnostics.singular_points.0.sigma_min`,
 /// `expect.components.ok`, `settings.parameters.connection.max_face_depth`): list indices match
-/// `[]`, map keys `*`, and anything below a number list or JSON text is that field. nullptr when
-/// no field matches.
+/// `[]`, map keys `*`, and anything below a list of numbers or strings or JSON text is that field.
+/// nullptr when no field matches.
 const SummaryField* summaryFieldOf(std::string_view path);
 
 }  // namespace ndc

@@ -116,6 +116,10 @@ struct TopologyRecord {
 struct Summary {
   std::string problem;
   int n = 0, k = 0;
+  /// The problem's variable names, one per coordinate (an application's parameter names);
+  /// empty where a run has none, and then the outputs name the coordinates `u0 ..`
+  /// (`variables` in summary.json, docs/contracts.md 4.5).
+  std::vector<std::string> variables;
   Settings settings;
   /// Per strategy family, in pipeline order: the parameter values the run used, as a JSON
   /// object (`settings.parameters` in summary.json; `{}` for a model without parameters).

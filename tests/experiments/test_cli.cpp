@@ -555,8 +555,9 @@ TEST_CASE("cli: solve writes singular.csv and the diagnostics of docs/contracts.
   CHECK(!fs::exists(out / ".ndcontour-partial-999999999"));
   CHECK(!fs::exists(out / "input.ply"));
   CHECK(!fs::exists(out / "cells.csv"));  // written only with --cells
-  // The circle has no singular point: singular.csv is its header.
-  CHECK(slurp(out / "singular.csv") == "point,sigma_min,u0,u1\n");
+  // The circle has no singular point: singular.csv is its header (u0.., then the variables'
+  // names, docs/contracts.md 4.4 "Names").
+  CHECK(slurp(out / "singular.csv") == "point,sigma_min,u0,u1,x,y\n");
   const std::string summary = slurp(out / "summary.json");
   for (const char* field :
        {"\"singular_points\": []", "\"off_manifold_vertices\": 0",

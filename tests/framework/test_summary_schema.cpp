@@ -23,6 +23,7 @@ ndc::Summary fullSummary(bool comparable) {
   s.problem = "full \"quoted\" problem";
   s.n = 4;
   s.k = 2;
+  s.variables = {"x", "y", "z", "w"};
   s.settings.depth = 7;
   s.settings.bounding = "bernstein";
   s.settings.subdivision = "uniform";
@@ -96,6 +97,7 @@ TEST_CASE("summary schema: the bytes of summary.json", "[summary][experiment]") 
   "problem": "full \"quoted\" problem",
   "n": 4,
   "k": 2,
+  "variables": ["x", "y", "z", "w"],
   "settings": {"depth": 7, "bounding": "bernstein", "subdivision": "uniform", "scalar": "mpfr", "precision_bits": 128, "projection": "newton", "classification": "paper", "connection": "paper", "jitter": 18446744073709551615, "max_depth": 16, "tolerance": 0.001, "threads": 3, "parameters": {"bounding": {}, "connection": {"max_face_depth": 20}}},
   "cells": {"visited": 101, "solution": 55, "normal": 40, "abnormal": 10, "failed": 5},
   "mesh": {"vertices": 12, "edges": 30, "triangles": 20, "components": 2, "boundary_edges": 3, "boundary_components": 7, "nonmanifold_edges": 4, "euler_characteristic": -2, "open_ends": 5, "branch_vertices": 6, "orientable": false},
@@ -118,6 +120,7 @@ TEST_CASE("summary schema: the bytes of summary.json", "[summary][experiment]") 
   "problem": "full \"quoted\" problem",
   "n": 4,
   "k": 2,
+  "variables": ["x", "y", "z", "w"],
   "settings": {"depth": 7, "bounding": "bernstein", "subdivision": "uniform", "scalar": "mpfr", "precision_bits": 128, "projection": "newton", "classification": "paper", "connection": "paper", "jitter": 18446744073709551615, "max_depth": 16, "tolerance": 0.001, "threads": 3, "parameters": {"bounding": {}, "connection": {"max_face_depth": 20}}},
   "cells": {"visited": 101, "solution": 55, "normal": 40, "abnormal": 10, "failed": 5},
   "mesh": {"vertices": 12, "edges": 30, "triangles": 20, "components": 2, "boundary_edges": 3, "boundary_components": 7, "nonmanifold_edges": 4, "euler_characteristic": -2, "open_ends": 5, "branch_vertices": 6, "orientable": false},
