@@ -58,7 +58,7 @@ std::string viewerLinkTable(const CsvTable& csv,
     table.rows.push_back({g.key[0], detail::join(links, " · ")});
   }
   if (pages == 0) return "";
-  return "\n3-D views of the meshes (`ndcontour view`, " + std::to_string(pages) +
+  return "\n\n3-D views of the meshes (`ndcontour view`, " + std::to_string(pages) +
          (pages == 1 ? " page" : " pages") + "):\n\n" + toMarkdown(table);
 }
 
