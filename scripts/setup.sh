@@ -15,7 +15,7 @@ packages=(
   libeigen3-dev libboost-dev libmpfr-dev libmpfi-dev libgmp-dev libtbb-dev
   catch2 doxygen gnuplot-nox libtomlplusplus-dev libcli11-dev libbenchmark-dev
   clang libclang-rt-14-dev
-  python3 python3-dev pybind11-dev python3-numpy python3-pytest python3-meshio python3-scipy python3-skimage
+  python3 python3-dev pybind11-dev python3-numpy python3-pytest python3-meshio python3-scipy python3-skimage python3-venv
   zlib1g-dev
   chromium
   paraview python3-paraview

@@ -1,7 +1,8 @@
-// The Python module `ndcontour` (docs/python.md): solve a problem given as a path, TOML text or a
-// dict, and get the mesh as numpy arrays, the summary as a dict, and the outputs of `solve --out`.
-// The settings are validated by the command line's own code, so a bad value raises
-// ndcontour.InputError with the message the CLI prints.
+// The extension `ndcontour._core` of the Python package `ndcontour` (docs/python.md; the typed
+// front, `solve`'s signature and the progress bar are in experiments/python/ndcontour/__init__.py):
+// solve a problem given as a path, TOML text or a dict, and get the mesh as numpy arrays, the
+// summary as a dict, and the outputs of `solve --out`. The settings are validated by the command
+// line's own code, so a bad value raises ndcontour.InputError with the message the CLI prints.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -25,6 +26,7 @@
 #include "applications/load.hpp"
 #include "framework/io/io.hpp"
 #include "framework/io/result.hpp"
+#include "framework/io/vertex_rows.hpp"
 #include "framework/problem/expectation.hpp"
 #include "framework/problem/summary.hpp"
 #include "framework/util/errors.hpp"
@@ -97,6 +99,27 @@ ndc::Problem problemOf(const py::object& problem) {
 /// One solve's result, as the Python object `ndcontour.Result`.
 struct Result {
   std::shared_ptr<ndc::RunResult> run;
+  std::vector<std::string> variables;  ///< the problem's variable names
+
+  /// Columns [first, first + 3) of mesh.ply's vertex rows (x y z, or x2 y2 z2), as (N, 3).
+  py::array_t<double> imageColumns(std::size_t first) const {
+    ndc::VertexRows rows(*run);
+    py::array_t<double> out({static_cast<py::ssize_t>(rows.count()), py::ssize_t{3}});
+    double* o = out.mutable_data();
+    for (std::size_t v = 0; v < rows.count(); ++v) {
+      const auto row = rows(v);
+      std::copy(row.begin() + first, row.begin() + first + 3, o + 3 * v);
+    }
+    return out;
+  }
+  /// The point in R^3 a viewer shows: the application's image, else the first three
+  /// coordinates (zero-padded for n = 2).
+  py::array_t<double> image() const { return imageColumns(0); }
+  /// The convex hull's second image (x2 y2 z2), or None.
+  py::object image2() const {
+    if (!run->application || !run->application->secondImage) return py::none();
+    return imageColumns(3 + static_cast<std::size_t>(run->n));
+  }
 
   py::array_t<double> vertices() const {
     const auto rows = static_cast<py::ssize_t>(run->vertices.size() / std::max(1, run->n));
@@ -255,11 +278,51 @@ ndc::SolveOptions optionsOf(const py::kwargs& kwargs, PythonOptions& python) {
 /// Only one solve runs at a time in the process: the stop request (stop.hpp) is process-wide.
 std::mutex solveMutex;
 
+/// Carries the pipeline's progress (called on its threads) to a Python callable called on the
+/// caller's thread. Completed stages (fraction 1) are kept in order; a report of an unfinished
+/// stage replaces the unfinished one before it, so a slow callable never holds the run back and
+/// still sees every stage end.
+class ProgressRelay {
+ public:
+  explicit ProgressRelay(py::object callable) : callable_(std::move(callable)) {}
+  bool active() const { return !callable_.is_none(); }
+
+  /// The pipeline's ndc::Progress (any thread).
+  ndc::Progress sink() {
+    if (!active()) return {};
+    return [this](const char* stage, double fraction) {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      // A stage ends once (the pipeline may report its end again).
+      if (fraction >= 1.0 && last_ == stage) return;
+      last_ = fraction >= 1.0 ? stage : "";
+      if (!queue_.empty() && queue_.back().second < 1.0) queue_.pop_back();
+      queue_.emplace_back(stage, fraction);
+    };
+  }
+  /// Calls the Python callable with each queued report (the GIL held).
+  void deliver() {
+    if (!active()) return;
+    std::vector<std::pair<std::string, double>> reports;
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      reports.swap(queue_);
+    }
+    for (const auto& [stage, fraction] : reports) callable_(stage, fraction);
+  }
+
+ private:
+  py::object callable_;
+  std::mutex mutex_;
+  std::vector<std::pair<std::string, double>> queue_;
+  std::string last_;  ///< the stage whose end was the last report
+};
+
 /// Runs `work` on a worker thread while this thread, the caller's, waits with the GIL released
-/// and takes it back every 50 ms to run Python's signal handlers: an exception one raises
-/// (KeyboardInterrupt on Ctrl-C) stops the run at its next work item and propagates from here.
+/// and takes it back every 50 ms to run Python's signal handlers and deliver the progress: an
+/// exception either raises (KeyboardInterrupt on Ctrl-C, or one from the progress callable)
+/// stops the run at its next work item and propagates from here.
 template <class Work>
-void runInterruptibly(Work&& work) {
+void runInterruptibly(Work&& work, ProgressRelay& progress) {
   std::exception_ptr failure;
   std::promise<void> done;
   std::future<void> finished = done.get_future();
@@ -271,20 +334,26 @@ void runInterruptibly(Work&& work) {
     }
     done.set_value();
   });
-  bool interrupted = false;
-  for (;;) {
+  std::exception_ptr interruption;
+  for (bool ready = false; !ready;) {
     {
       py::gil_scoped_release release;  // other Python threads run during the solve
-      if (finished.wait_for(std::chrono::milliseconds(50)) == std::future_status::ready) break;
+      ready = finished.wait_for(std::chrono::milliseconds(50)) == std::future_status::ready;
     }
-    if (!interrupted && PyErr_CheckSignals() != 0) {
-      interrupted = true;  // the handler's exception is set; the worker ends at its next item
+    if (interruption) continue;
+    try {
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+      progress.deliver();
+    } catch (...) {
+      // Ctrl-C's handler or the callable raised: the worker ends at its next item.
+      interruption = std::current_exception();
       ndc::requestStop(ndc::StopReason::kInterrupt);
     }
   }
   worker.join();
-  if (interrupted) throw py::error_already_set();
+  if (interruption) std::rethrow_exception(interruption);
   if (failure) std::rethrow_exception(failure);
+  progress.deliver();  // the last stage's end
 }
 
 /// Warns (Python's `warnings`) as the CLI does on standard error: ExpectationWarning for each
@@ -309,7 +378,12 @@ void warnAbout(const ndc::RunResult& run, const py::object& category) {
 
 py::object expectationWarning;
 
-Result solve(const py::object& problemArg, const py::kwargs& kwargs) {
+Result solve(const py::object& problemArg, const py::object& progressArg,
+             const py::kwargs& kwargs) {
+  if (!progressArg.is_none() && !PyCallable_Check(progressArg.ptr()))
+    throw py::type_error("solve(): progress must be callable, True, False or None, not " +
+                         typeName(progressArg));
+  ProgressRelay progress(progressArg);
   PythonOptions python;
   ndc::SolveOptions options = optionsOf(kwargs, python);
   const ndc::Problem problem = problemOf(problemArg);
@@ -326,10 +400,12 @@ Result solve(const py::object& problemArg, const py::kwargs& kwargs) {
                                    std::chrono::duration<double>(*python.timeout)),
                            *python.timeout);
     try {
-      runInterruptibly([&] {
-        *run = ndc::runPipeline(problem, options.settings);
-        run->summary.expect = ndc::checkExpectation(problem.expect, run->summary.mesh, run->k);
-      });
+      runInterruptibly(
+          [&] {
+            *run = ndc::runPipeline(problem, options.settings, progress.sink());
+            run->summary.expect = ndc::checkExpectation(problem.expect, run->summary.mesh, run->k);
+          },
+          progress);
     } catch (...) {
       ndc::clearStop();
       throw;
@@ -337,7 +413,7 @@ Result solve(const py::object& problemArg, const py::kwargs& kwargs) {
     ndc::clearStop();
   }
   warnAbout(*run, expectationWarning);
-  return Result{std::move(run)};
+  return Result{std::move(run), problem.variables};
 }
 
 std::string oneLine(std::string s) {
@@ -348,7 +424,7 @@ std::string oneLine(std::string s) {
 
 }  // namespace
 
-PYBIND11_MODULE(ndcontour, m) {
+PYBIND11_MODULE(_core, m) {
   m.doc() =
       "ndcontour: the common zero set of n - k polynomial constraints in n variables as a "
       "polyline (k = 1) or a triangle mesh (k = 2), in any dimension n (docs/python.md).";
@@ -389,6 +465,17 @@ PYBIND11_MODULE(ndcontour, m) {
       .def_property_readonly("simplices", &Result::simplices,
                              "Segments (k = 1) or triangles (k = 2): an (M, k + 1) int64 array "
                              "of vertex rows.")
+      .def_property_readonly("image", &Result::image,
+                             "The point in R^3 of each vertex, an (N, 3) float64 array: an "
+                             "application's image (the bisector, the blend surface, ...), else "
+                             "the first three coordinates (zero-padded for n = 2); mesh.ply's "
+                             "x y z.")
+      .def_property_readonly("image2", &Result::image2,
+                             "The convex hull's second image (mesh.ply's x2 y2 z2) as an (N, 3) "
+                             "array, or None.")
+      .def_property_readonly(
+          "variables", [](const Result& r) { return r.variables; },
+          "The problem's variable names, one per column of `vertices`.")
       .def_property_readonly("summary", &Result::summary,
                              "The summary, the same dict as summary.json (docs/contracts.md).")
       .def("write", &Result::write, py::arg("dir"), py::kw_only(), py::arg("ascii") = false,
@@ -405,16 +492,23 @@ PYBIND11_MODULE(ndcontour, m) {
                (r.run->summary.topology.certified ? "certified" : "not certified") + ">";
       });
 
-  m.def("solve", &solve, py::arg("problem"),
-        "solve(problem, *, depth=6, max_depth=None, tolerance=None, bounding='linearized', "
-        "subdivision='binary', projection='newton', classification='paper', "
-        "connection='crossing', scalar='double', precision=None, jitter=None, "
-        "max_memory=None, threads=None, timeout=None)\n\n"
-        "Solves a problem: a path (str or os.PathLike), TOML text (a str with a line break) or "
-        "a dict of the problem file's tables. The keywords are `ndcontour solve`'s options; "
-        "a value of the wrong type raises TypeError naming the option, bad input "
-        "ndcontour.InputError (a ValueError) with the CLI's message. The GIL is released while "
-        "the pipeline runs; Ctrl-C raises KeyboardInterrupt within one work item, and a run "
-        "past `timeout` seconds raises TimeoutError. A mesh that does not match the "
-        "problem's [expect] warns with ndcontour.ExpectationWarning.");
+  m.def("solve", &solve, py::arg("problem"), py::arg("progress"),
+        "The pipeline behind ndcontour.solve (use that: it has the signature and the defaults). "
+        "progress is None or a callable(stage: str, fraction: float).");
+  m.def(
+      "defaults",
+      [] {
+        const ndc::Settings s;
+        py::dict d;
+        d["depth"] = s.depth;
+        d["bounding"] = s.bounding;
+        d["subdivision"] = s.subdivision;
+        d["projection"] = s.projection;
+        d["classification"] = s.classification;
+        d["connection"] = s.connection;
+        d["scalar"] = s.scalar;
+        return d;
+      },
+      "The defaults of `ndcontour solve`'s options (ndc::Settings), which solve()'s signature "
+      "repeats (a test compares them).");
 }
