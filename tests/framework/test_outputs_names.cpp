@@ -312,3 +312,32 @@ TEST_CASE("names: a solve writes the problem's names into every file", "[cli][na
   CHECK(arrays.at("x5") == arrays.at("u4"));
   CHECK(arrays.at("types").size() == arrays.at("class").size());
 }
+
+TEST_CASE("names: a split solve reads its pieces' uncertified.csv with the names' columns",
+          "[cli][names][split]") {
+  // The unit circle on [-1, 1]^2 touches the domain's faces: 8 cells stay uncertified, in one
+  // solve and in 4 pieces glued (their uncertified.csv carry lo_x, hi_x, .. after lo0, hi0, ..).
+  const fs::path problem = scratch() / "tangent.toml";
+  std::ofstream(problem) << "name = \"tangent-circle\"\nvariables = [\"x\", \"y\"]\n"
+                            "domain = [[-1, 1], [-1, 1]]\nequations = [\"x^2 + y^2 - 1\"]\n";
+  const auto cellRows = [](const fs::path& csv) {
+    std::istringstream in(ndc::test::slurp(csv));
+    int rows = 0;
+    for (std::string line; std::getline(in, line);) rows += line.starts_with("cell,");
+    return rows;
+  };
+  for (const std::string split : {"", " --split 4"}) {
+    INFO(split);
+    const fs::path out = scratch() / ("tangent" + std::to_string(split.size()));
+    const auto run =
+        ndc::test::runNdcontour("solve " + ndc::test::quoted(problem.string()) + " --depth 4" +
+                                    split + " --out " + ndc::test::quoted(out.string()),
+                                scratch());
+    REQUIRE(run.status == 0);
+    CHECK(firstLine(ndc::test::slurp(out / "uncertified.csv")) ==
+          "kind,level,reason,lo0,hi0,lo1,hi1,lo_x,hi_x,lo_y,hi_y");
+    CHECK(cellRows(out / "uncertified.csv") == 8);
+    CHECK(ndc::test::slurp(out / "summary.json").find("\"uncertified_cells\": 8") !=
+          std::string::npos);
+  }
+}
