@@ -145,7 +145,7 @@ struct Result {
     return py::module_::import("json").attr("loads")(ndc::toJson(run->summary));
   }
   std::vector<std::string> write(const py::object& dirArg, bool ascii, bool cells, bool vtk,
-                                 bool obj) const {
+                                 bool vtkLegacy, bool obj) const {
     // A str or any os.PathLike, as solve() takes.
     if (!py::isinstance<py::str>(dirArg) && !py::hasattr(dirArg, "__fspath__"))
       throw py::type_error("write(): dir must be a str or an os.PathLike, not " +
@@ -155,6 +155,7 @@ struct Result {
     output.format = ascii ? ndc::PlyFormat::ascii : ndc::PlyFormat::binary;
     output.cells = cells;
     output.vtk = vtk;
+    output.legacyVtk = vtkLegacy;
     output.obj = obj;
     std::vector<std::string> written;
     {
@@ -479,10 +480,11 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("summary", &Result::summary,
                              "The summary, the same dict as summary.json (docs/contracts.md).")
       .def("write", &Result::write, py::arg("dir"), py::kw_only(), py::arg("ascii") = false,
-           py::arg("cells") = false, py::arg("vtk") = false, py::arg("obj") = false,
-           "Writes the files of `ndcontour solve --out DIR` (binary PLY unless ascii; "
-           "cells.csv with cells, mesh.vtu with vtk, mesh.obj with obj) and returns their "
-           "paths.")
+           py::arg("cells") = false, py::arg("vtk") = false, py::arg("vtk_legacy") = false,
+           py::arg("obj") = false,
+           "Writes the files of `ndcontour solve --out DIR` (binary PLY and VTU unless ascii; "
+           "cells.csv with cells, mesh.vtu with vtk, mesh.vtk (legacy VTK, which meshio reads "
+           "curves from) with vtk_legacy, mesh.obj with obj) and returns their paths.")
       .def("__repr__", [](const Result& r) {
         const auto& mesh = r.run->summary.mesh;
         return "<ndcontour.Result " + r.run->summary.problem + ": n = " + std::to_string(r.run->n) +

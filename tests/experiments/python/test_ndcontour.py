@@ -122,6 +122,13 @@ def test_write_gives_the_files_of_solve_out(tmp_path):
     assert header.startswith(b"ply\nformat binary_little_endian 1.0\n")
     r.write(str(tmp_path / "ascii"), ascii=True)
     assert (tmp_path / "ascii" / "mesh.ply").read_bytes().startswith(b"ply\nformat ascii 1.0\n")
+    # The mesh files of every format are those of `solve --out` with the same flags.
+    r.write(tmp_path / "all", vtk=True, vtk_legacy=True, obj=True)
+    subprocess.run([BINARY, "solve", str(PROBLEMS / "sphere.toml"), "--depth", "3", "--out",
+                    str(tmp_path / "cli"), "--vtk", "--vtk-legacy", "--obj"],
+                   capture_output=True, check=True)
+    for name in ["mesh.ply", "mesh.vtu", "mesh.vtk", "mesh.obj"]:
+        assert (tmp_path / "all" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes()
 
 
 def test_the_gil_is_released_during_a_solve():
