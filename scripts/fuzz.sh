@@ -6,7 +6,8 @@
 #   --seconds N  run time per harness (default 60)
 #   --keep       continue from the corpus a previous run grew instead of a fresh seed copy
 #   harness      fuzz_problem, fuzz_expression, fuzz_application (default: all)
-# For hours: scripts/fuzz.sh --seconds 3600 --keep   (one hour per harness, one at a time)
+# For hours: scripts/fuzz.sh --seconds 3600 --keep   (one hour per harness, as many at once as
+# there are processors)
 # A finding (crash, sanitizer report, uncaught exception, timeout past 10 s, more than 2 GB)
 # stops that harness, keeps the input under build-sanitize/fuzz/<harness>/findings/ and makes
 # the script exit 1 after the other harnesses ran. Exits 0 with a message when clang is not
@@ -44,9 +45,10 @@ for h in "${harnesses[@]}"; do
 done
 scripts/sanitize.sh --build "${harnesses[@]}"
 
-failed=()
-for h in "${harnesses[@]}"; do
-  work=build-sanitize/fuzz/$h
+# fuzz_one HARNESS: one harness for $seconds s; its summary lines go to its work folder's
+# report, and its exit status to status.
+fuzz_one() {
+  local h=$1 work=build-sanitize/fuzz/$1 max_len=8192 status=0 runs
   if [[ $keep -eq 0 || ! -d $work/corpus ]]; then
     rm -rf "$work/corpus"
     mkdir -p "$work/corpus"
@@ -56,30 +58,50 @@ for h in "${harnesses[@]}"; do
       cp tests/corpus/*.toml "$work/corpus/"
     fi
   fi
+  rm -f "$work/report" "$work/status"
   mkdir -p "$work/findings"
-  max_len=8192
   [[ $h == fuzz_expression ]] && max_len=2048
-  options=(-max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -max_len=$max_len
-           -dict=tests/fuzz/$h.dict -artifact_prefix="$work/findings/" -print_final_stats=1)
-  export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
-  echo "fuzz: $h for $seconds s (log $work/fuzz.log)"
-  status=0
-  build-sanitize/bin/$h "${options[@]}" "$work/corpus" >"$work/fuzz.log" 2>&1 || status=$?
+  local options=(-max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -max_len=$max_len
+                 -dict=tests/fuzz/$h.dict -artifact_prefix="$work/findings/" -print_final_stats=1)
+  UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
+    build-sanitize/bin/$h "${options[@]}" "$work/corpus" >"$work/fuzz.log" 2>&1 || status=$?
   runs=$(grep -o 'stat::number_of_executed_units: [0-9]*' "$work/fuzz.log" | grep -o '[0-9]*$' || true)
-  echo "fuzz: $h: ${runs:-?} executions, corpus $(ls "$work/corpus" | wc -l) inputs, exit status $status"
-  if [[ $status -ne 0 ]]; then
+  {
+    echo "fuzz: $h: ${runs:-?} executions, corpus $(ls "$work/corpus" | wc -l) inputs, exit status $status"
+    if [[ $status -ne 0 ]]; then
+      grep -E 'ERROR|SUMMARY|runtime error|Test unit written|fuzz: check failed|what\(\)|terminate' \
+        "$work/fuzz.log" | head -20 || true
+      # The stack of the finding and the input itself, so that a log from another machine (CI)
+      # is enough to reproduce it: `base64 -d > input; build-sanitize/bin/<harness> input`.
+      grep -E '^ +#[0-9]+ ' "$work/fuzz.log" | head -30 || true
+      for f in "$work"/findings/*; do
+        [[ -f $f ]] || continue
+        echo "fuzz: input $(basename "$f") ($(stat -c %s "$f") bytes), base64:"
+        head -c 4096 "$f" | base64
+      done
+      echo "fuzz: $h: finding kept in $work/findings/ (whole log: $work/fuzz.log)"
+    fi
+  } >"$work/report"
+  echo "$status" >"$work/status"
+}
+
+# The harnesses run side by side, one per processor (each is one single-threaded process), so
+# that the run takes $seconds s per round of processors rather than per harness.
+jobs_max=$(nproc)
+for h in "${harnesses[@]}"; do
+  while [[ $(jobs -rp | wc -l) -ge $jobs_max ]]; do wait -n || true; done
+  echo "fuzz: $h for $seconds s (log build-sanitize/fuzz/$h/fuzz.log)"
+  fuzz_one "$h" &
+done
+wait
+failed=()
+for h in "${harnesses[@]}"; do
+  work=build-sanitize/fuzz/$h
+  if [[ $(cat "$work/status" 2>/dev/null || echo 1) -ne 0 ]]; then
     failed+=("$h")
-    grep -E 'ERROR|SUMMARY|runtime error|Test unit written|fuzz: check failed|what\(\)|terminate' \
-      "$work/fuzz.log" | head -20 >&2 || true
-    # The stack of the finding and the input itself, so that a log from another machine (CI)
-    # is enough to reproduce it: `base64 -d > input; build-sanitize/bin/<harness> input`.
-    grep -E '^ +#[0-9]+ ' "$work/fuzz.log" | head -30 >&2 || true
-    for f in "$work"/findings/*; do
-      [[ -f $f ]] || continue
-      echo "fuzz: input $(basename "$f") ($(stat -c %s "$f") bytes), base64:" >&2
-      head -c 4096 "$f" | base64 >&2
-    done
-    echo "fuzz: $h: finding kept in $work/findings/ (whole log: $work/fuzz.log)" >&2
+    cat "$work/report" >&2
+  else
+    cat "$work/report"
   fi
 done
 if [[ ${#failed[@]} -gt 0 ]]; then
