@@ -101,9 +101,9 @@ void checkSplitOptions(const SolveOptions& o) {
   if (o.domain) throw UsageError("--domain cannot be used with --split");
 }
 
-/// Shows the pieces that have ended, on a terminal only.
-void showProgress(std::size_t done, std::size_t total) {
-  if (!::isatty(STDERR_FILENO)) return;
+/// Shows the pieces that have ended, on a terminal only and not with `--json` (contracts 4.2).
+void showProgress(std::size_t done, std::size_t total, bool quiet) {
+  if (quiet || !::isatty(STDERR_FILENO)) return;
   std::fprintf(stderr, "\rpieces       %zu of %zu solved", done, total);
   if (done == total) std::fputs("\n", stderr);
   std::fflush(stderr);
@@ -156,9 +156,9 @@ int runSplitSolve(const SolveOptions& options, const Problem& problem) {
   executor.partition = options.slurmPartition;
   executor.slurmArgs = words(options.slurmArgs);
   std::size_t done = 0;
-  const std::vector<TaskOutcome> outcomes =
-      runTasks(tasks, executor,
-               [&](std::size_t, const TaskOutcome&) { showProgress(++done, tasks.size()); });
+  const std::vector<TaskOutcome> outcomes = runTasks(
+      tasks, executor,
+      [&](std::size_t, const TaskOutcome&) { showProgress(++done, tasks.size(), options.json); });
   std::vector<PieceOutput> pieces;
   for (std::size_t p = 0; p < tasks.size(); ++p) {
     if (outcomes[p].status != "ok")

@@ -260,6 +260,13 @@ TEST_CASE("cli: progress covers every stage on a terminal, and is silent with --
   CHECK(!contains(json, "[#"));
   CHECK(!contains(json, "100%"));
   CHECK(contains(json, "\"topology\""));
+  // The split solve counts its pieces on a terminal, and is silent with --json too.
+  const std::string split = onTerminal("solve " + quoted(sphere.string()) + " --depth 3 --split 2");
+  CHECK(contains(split, "pieces       2 of 2 solved"));
+  const std::string splitJson =
+      onTerminal("solve " + quoted(sphere.string()) + " --depth 3 --split 2 --json");
+  CHECK(!contains(splitJson, "pieces"));
+  CHECK(contains(splitJson, "\"topology\""));
   // Not a terminal: nothing but the report.
   const Run piped = ndcontour("solve " + quoted(sphere.string()) + " --depth 3");
   CHECK(piped.status == 0);
