@@ -18,6 +18,7 @@
 #include "experiments/view/embedded.hpp"
 #include "framework/io/io.hpp"
 #include "framework/problem/problem.hpp"
+#include "framework/util/base64.hpp"
 #include "framework/util/errors.hpp"
 #include "framework/util/json.hpp"
 
@@ -176,26 +177,10 @@ std::vector<std::uint8_t> uncertifiedFlags(const PlyMesh& mesh, const std::vecto
   return flags;
 }
 
-/// The bytes of `data` in base64 (RFC 4648, with padding).
+/// The bytes of `data` in base64.
 template <class T>
 std::string base64(const std::vector<T>& data) {
-  static constexpr char kDigits[] =
-      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string bytes(data.size() * sizeof(T), '\0');
-  if (!bytes.empty()) std::memcpy(bytes.data(), data.data(), bytes.size());
-  std::string out;
-  out.reserve((bytes.size() + 2) / 3 * 4);
-  for (std::size_t i = 0; i < bytes.size(); i += 3) {
-    const std::size_t left = bytes.size() - i;
-    std::uint32_t word = static_cast<std::uint8_t>(bytes[i]) << 16;
-    if (left > 1) word |= static_cast<std::uint8_t>(bytes[i + 1]) << 8;
-    if (left > 2) word |= static_cast<std::uint8_t>(bytes[i + 2]);
-    out += kDigits[(word >> 18) & 63];
-    out += kDigits[(word >> 12) & 63];
-    out += left > 1 ? kDigits[(word >> 6) & 63] : '=';
-    out += left > 2 ? kDigits[word & 63] : '=';
-  }
-  return out;
+  return ndc::base64(data.data(), data.size() * sizeof(T));
 }
 
 /// The mesh as the JSON the page reads (`ndc-mesh`).

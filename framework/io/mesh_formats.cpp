@@ -19,6 +19,7 @@
 #include "framework/io/io.hpp"
 #include "framework/io/variable_names.hpp"
 #include "framework/io/vertex_rows.hpp"
+#include "framework/util/base64.hpp"
 
 namespace ndc {
 
@@ -194,26 +195,7 @@ class VtkArrays {
                     block.begin() + static_cast<std::ptrdiff_t>(written));
     }
     out_ << "          ";
-    base64(reinterpret_cast<const unsigned char*>(header.data()), header.size() * 8);
-    base64(packed.data(), packed.size());
-  }
-
-  /// `size` bytes in base64 (RFC 4648, padded).
-  void base64(const unsigned char* p, std::size_t size) {
-    static constexpr char kDigits[] =
-        "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string text;
-    text.reserve((size + 2) / 3 * 4);
-    for (std::size_t i = 0; i < size; i += 3) {
-      const std::uint32_t a = p[i], b = i + 1 < size ? p[i + 1] : 0,
-                          c = i + 2 < size ? p[i + 2] : 0;
-      const std::uint32_t word = a << 16 | b << 8 | c;
-      text += kDigits[word >> 18 & 63];
-      text += kDigits[word >> 12 & 63];
-      text += i + 1 < size ? kDigits[word >> 6 & 63] : '=';
-      text += i + 2 < size ? kDigits[word & 63] : '=';
-    }
-    out_ << text;
+    out_ << base64(header.data(), header.size() * 8) << base64(packed.data(), packed.size());
   }
 
   static constexpr std::size_t kBlock = std::size_t{1} << 15;
