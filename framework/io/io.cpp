@@ -113,6 +113,13 @@ std::string numberList(const std::vector<double>& values) {
   return out + "]";
 }
 
+std::string integerList(const std::vector<std::int64_t>& values) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < values.size(); ++i)
+    out += (i ? ", " : "") + std::to_string(values[i]);
+  return out + "]";
+}
+
 std::string stringList(const std::vector<std::string>& values) {
   std::string out = "[";
   for (std::size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + jsonQuoted(values[i]);
@@ -277,6 +284,7 @@ class SummaryWriter {
     if (const double* x = std::get_if<double>(&v)) o_ << number(*x);
     if (const std::string* t = std::get_if<std::string>(&v)) o_ << jsonQuoted(*t);
     if (const auto* list = std::get_if<std::vector<double>>(&v)) o_ << numberList(*list);
+    if (const auto* list = std::get_if<std::vector<std::int64_t>>(&v)) o_ << integerList(*list);
     if (const auto* list = std::get_if<std::vector<std::string>>(&v)) o_ << stringList(*list);
     if (const SummaryJson* json = std::get_if<SummaryJson>(&v)) o_ << json->text;
   }

@@ -14,8 +14,10 @@ const SummaryField* summaryFieldOf(std::string_view path) {
   const SummaryField* field = nullptr;
   std::size_t at = 0;
   while (at <= path.size()) {
-    if (field && (field->type == SummaryType::numberList ||
-                  field->type == SummaryType::stringList || field->type == SummaryType::json))
+    if (field &&
+        (field->type == SummaryType::numberList || field->type == SummaryType::integerList ||
+         field->type == SummaryType::integerOrList || field->type == SummaryType::stringList ||
+         field->type == SummaryType::json))
       return field;
     const std::size_t dot = std::min(path.find('.', at), path.size());
     const std::string_view part = path.substr(at, dot - at);

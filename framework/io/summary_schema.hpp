@@ -20,16 +20,18 @@ namespace ndc {
 
 /// The JSON type of a summary field.
 enum class SummaryType {
-  object,      ///< an object; its fields are the rows `PATH.NAME` that follow
-  list,        ///< an array of objects, one per element; the element is the row `PATH[]`
-  map,         ///< an object whose keys come from the run; the value of each is the row `PATH.*`
-  string,      ///< a string
-  integer,     ///< an integer
-  number,      ///< a number (`%.17g`; null when not finite)
-  boolean,     ///< true or false
-  numberList,  ///< an array of numbers
-  stringList,  ///< an array of strings
-  json         ///< JSON text written as it is (a strategy's parameters)
+  object,         ///< an object; its fields are the rows `PATH.NAME` that follow
+  list,           ///< an array of objects, one per element; the element is the row `PATH[]`
+  map,            ///< an object whose keys come from the run; the value of each is the row `PATH.*`
+  string,         ///< a string
+  integer,        ///< an integer
+  number,         ///< a number (`%.17g`; null when not finite)
+  boolean,        ///< true or false
+  numberList,     ///< an array of numbers
+  integerList,    ///< an array of integers
+  integerOrList,  ///< an integer, or an array of integers (the list keys of `expect`)
+  stringList,     ///< an array of strings
+  json            ///< JSON text written as it is (a strategy's parameters)
 };
 
 /// The field is left out of the summary (an empty `expect`, `application` without an application
@@ -49,9 +51,10 @@ struct SummaryKeys {
 /// The value of one field in one run, as the writer writes it: null, absent, a boolean, an
 /// integer, a number, a string, a list of numbers or of strings, JSON text, or the elements of a
 /// container.
-using SummaryValue = std::variant<std::nullptr_t, SummaryAbsent, bool, std::int64_t, std::uint64_t,
-                                  double, std::string, std::vector<double>,
-                                  std::vector<std::string>, SummaryJson, SummaryKeys>;
+using SummaryValue =
+    std::variant<std::nullptr_t, SummaryAbsent, bool, std::int64_t, std::uint64_t, double,
+                 std::string, std::vector<double>, std::vector<std::string>, SummaryJson,
+                 SummaryKeys, std::vector<std::int64_t>>;
 
 /// Where a field starts in the text of summary.json.
 enum class SummaryLayout {
@@ -91,6 +94,12 @@ using I = std::size_t;                                      ///< the element of 
 
 /// The value of a string field that is null when empty.
 inline Value orNull(const std::string& s) { return s.empty() ? Value(nullptr) : Value(s); }
+
+/// The value of an `expect` key's `wanted` or `got`: an integer, or a list for a list key.
+inline Value expectValue(const ExpectCheck& c, long value, const std::vector<long>& list) {
+  if (!c.isList) return std::int64_t{value};
+  return std::vector<std::int64_t>(list.begin(), list.end());
+}
 
 // clang-format off
 /// Every field of summary.json in the order the writer writes them (docs/contracts.md 4.3, 4.5).
@@ -185,6 +194,17 @@ inline constexpr SummaryField kSummaryFields[] = {
     {"mesh.orientable", T::boolean, false, true,
      "whether every component could be oriented consistently", 0, kInline,
      [](S s, I) -> Value { return s.mesh.orientable; }},
+    {"mesh.betti", T::integerList, false, true,
+     "Betti numbers b_0 .. b_k over Q (ranks modulo 2^31 - 1)", 0, kInline,
+     [](S s, I) -> Value { return s.mesh.betti; }},
+    {"mesh.betti_z2", T::integerList, false, true, "Betti numbers b_0 .. b_k over Z/2", 0,
+     kInline, [](S s, I) -> Value { return s.mesh.bettiZ2; }},
+    {"mesh.boundary_facets", T::integer, false, true,
+     "(k-1)-faces of exactly one k-simplex (every k)", 42, kInline,
+     nullptr, &MeshStats::boundaryFacets},
+    {"mesh.nonmanifold_facets", T::integer, false, true,
+     "(k-1)-faces of three or more k-simplices (every k)", 43, kInline,
+     nullptr, &MeshStats::nonmanifoldFacets},
     // accuracy
     {"accuracy", T::object, false, false, "how close the mesh is to M", 0, kInline, nullptr},
     {"accuracy.max_residual", T::number, false, false,
@@ -295,12 +315,15 @@ inline constexpr SummaryField kSummaryFields[] = {
        for (const ExpectCheck& c : s.expect) k.keys.push_back(c.key);
        return k; }},
     {"expect.*", T::object, false, true, "one key of `[expect]`", 0, kInline, nullptr},
-    {"expect.*.wanted", T::integer, false, true, "the value the problem file expects", 0, kInline,
-     [](S s, I i) -> Value { return std::int64_t{s.expect[i].wanted}; }},
-    {"expect.*.got", T::integer, true, true, "the mesh's value; null when not comparable", 0,
-     kInline, [](S s, I i) -> Value {
+    {"expect.*.wanted", T::integerOrList, false, true,
+     "the value the problem file expects (a list for `betti`, `betti_z2`)", 0, kInline,
+     [](S s, I i) -> Value {
        const ExpectCheck& c = s.expect[i];
-       return c.notComparable.empty() ? Value(std::int64_t{c.got}) : Value(nullptr); }},
+       return expectValue(c, c.wanted, c.wantedList); }},
+    {"expect.*.got", T::integerOrList, true, true, "the mesh's value; null when not comparable",
+     0, kInline, [](S s, I i) -> Value {
+       const ExpectCheck& c = s.expect[i];
+       return c.notComparable.empty() ? expectValue(c, c.got, c.gotList) : Value(nullptr); }},
     {"expect.*.ok", T::boolean, true, true, "whether they agree; null when not comparable", 0,
      kInline, [](S s, I i) -> Value {
        const ExpectCheck& c = s.expect[i];

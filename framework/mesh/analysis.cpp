@@ -16,14 +16,15 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <functional>
 #include <numeric>
 #include <span>
-#include <unordered_map>
 #include <vector>
 
+#include "framework/mesh/homology.hpp"
 #include "framework/numeric/parallel.hpp"
 #include "framework/util/disjoint_sets.hpp"
 #include "framework/util/flat_map.hpp"
@@ -42,33 +43,10 @@ std::uint64_t mix(std::uint64_t h, std::uint64_t v) {
   return h ^ (h >> 31);
 }
 
-struct VectorHash {
-  std::size_t operator()(const std::vector<std::int32_t>& v) const {
-    std::uint64_t h = v.size();
-    for (std::int32_t x : v) h = mix(h, static_cast<std::uint32_t>(x));
-    return static_cast<std::size_t>(h);
-  }
-};
-
 std::uint64_t edgeKey(std::int32_t a, std::int32_t b) {
   if (a > b) std::swap(a, b);
   return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
          static_cast<std::uint32_t>(b);
-}
-
-/// Every (d+1)-vertex subset of a simplex, sorted, appended to `faces` (d + 1 ints each).
-void subsets(std::span<const std::int32_t> simplex, int size, std::vector<std::int32_t>& chosen,
-             int start, std::vector<std::vector<std::int32_t>>& faces) {
-  if (static_cast<int>(chosen.size()) == size) {
-    faces.push_back(chosen);
-    std::sort(faces.back().begin(), faces.back().end());
-    return;
-  }
-  for (int i = start; i < static_cast<int>(simplex.size()); ++i) {
-    chosen.push_back(simplex[i]);
-    subsets(simplex, size, chosen, i + 1, faces);
-    chosen.pop_back();
-  }
 }
 
 /// Clears keep[s] of every record s (`width` integers each in `keys`) whose key equals that
@@ -435,35 +413,6 @@ void surfaceTopology(const EdgeCounts& edges, std::size_t vertexCount, std::size
   stats.eulerCharacteristic = stats.vertices - stats.edges + stats.triangles;
 }
 
-/// k >= 3, beyond docs/contracts.md 4.3: triangles are the distinct 2-faces, boundary /
-/// non-manifold count the (k-1)-faces of one / three or more simplices, and chi is the full
-/// alternating sum.
-template <class S>
-void higherTopology(const Complex<S>& welded, MeshStats& stats) {
-  const int k = welded.k;
-  std::int64_t chi = stats.vertices - stats.edges;
-  std::vector<std::int32_t> chosen;
-  for (int d = 2; d <= k; ++d) {
-    std::unordered_map<std::vector<std::int32_t>, std::int32_t, VectorHash> faces;
-    std::vector<std::vector<std::int32_t>> list;
-    for (std::size_t s = 0; s < welded.simplexCount(); ++s) {
-      list.clear();
-      subsets(simplexAt(welded, s), d + 1, chosen, 0, list);
-      for (auto& f : list) ++faces[std::move(f)];
-    }
-    const auto count = static_cast<std::int64_t>(faces.size());
-    chi += (d % 2 == 0 ? count : -count);
-    if (d == 2) stats.triangles = count;
-    if (d == k - 1) {
-      for (const auto& [face, c] : faces) {
-        if (c == 1) ++stats.boundaryEdges;
-        if (c >= 3) ++stats.nonmanifoldEdges;
-      }
-    }
-  }
-  stats.eulerCharacteristic = chi;
-}
-
 /// Accuracy: the largest residual at the vertices and the chord error, the distance of each
 /// simplex's barycentre to its Newton projection onto M (in S).
 template <class S>
@@ -511,6 +460,25 @@ void accuracy(const Complex<S>& welded, const System<S>& system, const Projector
   stats.maxChordError = toDouble(worstChord);
 }
 
+/// The Betti numbers and facet counts of `h` into `stats`. For k <= 2 the other topology fields
+/// are counted independently, and the Euler characteristics must agree; for k >= 3, beyond
+/// docs/contracts.md 4.3, they are taken from h: triangles are the distinct 2-faces, boundary /
+/// non-manifold edges count the (k-1)-faces of one / three or more simplices, and chi is the full
+/// alternating sum.
+void addHomology(const Homology& h, int k, MeshStats& stats) {
+  if (k >= 3) {
+    stats.triangles = h.faces[2];
+    stats.boundaryEdges = h.boundaryFacets;
+    stats.nonmanifoldEdges = h.nonmanifoldFacets;
+    stats.eulerCharacteristic = h.eulerCharacteristic();
+  }
+  stats.betti = h.betti;
+  stats.bettiZ2 = h.bettiZ2;
+  stats.boundaryFacets = h.boundaryFacets;
+  stats.nonmanifoldFacets = h.nonmanifoldFacets;
+  assert(h.eulerCharacteristic() == stats.eulerCharacteristic);
+}
+
 }  // namespace
 
 template <class S>
@@ -525,13 +493,18 @@ MeshStats analyse(const Complex<S>& welded, const System<S>& system, const Proje
     const EdgeCounts edges = countEdges(welded, stats);
     if (welded.k == 1) curveTopology(edges, welded.vertexCount(), stats);
     if (welded.k == 2) surfaceTopology(edges, welded.vertexCount(), welded.simplexCount(), stats);
-    if (welded.k >= 3) higherTopology(welded, stats);
   });
+  // The homology in a task of its own, so that it runs beside both (it reads only the mesh).
+  Homology h;
+  TaskBeside homologyTask;
+  homologyTask.start([&welded, &h] { h = homology(welded); });
   accuracy(welded, system, project, measured);
   topology.wait();
+  homologyTask.wait();
   stats.maxResidual = measured.maxResidual;
   stats.maxChordError = measured.maxChordError;
   stats.chordFailures = measured.chordFailures;
+  addHomology(h, welded.k, stats);
   return stats;
 }
 

@@ -18,7 +18,8 @@ Complex<S> weld(const Complex<S>& complex, double tolerance);
 /// Every `mesh` and `accuracy` field of docs/contracts.md 4.3 for a welded complex: vertices,
 /// edges, triangles, components, boundary and non-manifold edges, Euler characteristic, open ends,
 /// branch vertices, max residual over vertices, max chord error (midpoints or centroids
-/// projected with `project`).
+/// projected with `project`), Betti numbers over Q and Z/2 and the facets of one and of three or
+/// more k-simplices (framework/mesh/homology.hpp; docs/contracts.md 4.5).
 template <class S>
 MeshStats analyse(const Complex<S>& welded, const System<S>& system, const Projector<S>& project);
 

@@ -52,6 +52,12 @@ struct MeshStats {
   /// Whether every connected component could be oriented consistently; the simplices of the
   /// output are oriented so (framework/mesh/orientation.hpp).
   bool orientable = true;
+  /// Betti numbers b_0 .. b_k over Q (ranks modulo 2^31 - 1) and over Z/2
+  /// (framework/mesh/homology.hpp); empty until the analysis fills them.
+  std::vector<std::int64_t> betti, bettiZ2;
+  /// (k-1)-faces of exactly one k-simplex (k = 1: open ends, k = 2: boundary edges) and of
+  /// three or more (k = 1: branch vertices, k = 2: non-manifold edges), for every k.
+  std::int64_t boundaryFacets = 0, nonmanifoldFacets = 0;
 };
 
 /// A point of M where the Jacobian of the constraints loses rank (`diagnostics.singular_points`).
@@ -69,6 +75,10 @@ struct ExpectCheck {
   /// Why the key could not be compared (not a mesh statistic, or genus of a mesh that is not
   /// one closed surface); empty when it was. A key not compared has `ok` false and no `got`.
   std::string notComparable;
+  /// A key whose value is a list (`betti`, `betti_z2`): `wanted` and `got` are unused and the
+  /// lists are these.
+  bool isList = false;
+  std::vector<long> wantedList, gotList;
 };
 
 /// How the crossing connection put M in general position with respect to the grid

@@ -155,7 +155,7 @@ const std::string kHeader =
     "budget.max_memory_bytes,budget.estimated_memory_bytes,budget.timeout_s,"
     "topology.base_level,topology.certified_cells,topology.max_depth,topology.max_level,"
     "topology.reason,topology.refined_cells,topology.uncertified_cells,topology.block_cells,"
-    "budget.estimated_time_s,topology.faces_solved";
+    "budget.estimated_time_s,topology.faces_solved,mesh.boundary_facets,mesh.nonmanifold_facets";
 
 const std::string kTiny =
     "id = \"tiny\"\nartefact = \"table\"\ndescription = \"a tiny grid\"\n"
