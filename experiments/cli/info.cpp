@@ -61,11 +61,16 @@ void printInfo(const Problem& p, std::ostream& out) {
   }
 
   const Expectation& x = p.expect;
-  if (x.components || x.eulerCharacteristic || !x.other.empty()) {
+  if (!x.empty()) {
     out << "expect:\n";
     if (x.components) out << "  components: " << *x.components << '\n';
     if (x.eulerCharacteristic) out << "  euler_characteristic: " << *x.eulerCharacteristic << '\n';
     for (const auto& [key, value] : x.other) out << "  " << key << ": " << value << '\n';
+    for (const auto& [key, values] : x.lists) {
+      out << "  " << key << ":";
+      for (const long value : values) out << ' ' << value;
+      out << '\n';
+    }
   }
 }
 

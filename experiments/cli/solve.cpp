@@ -74,8 +74,7 @@ void warn(const Problem& problem, const Summary& s, bool check) {
   for (const ExpectCheck& c : s.expect)
     if (!c.ok) std::cerr << file << ": " << describeCheck(c) << '\n';
   const Expectation& x = problem.expect;
-  if (check && !x.components && !x.eulerCharacteristic && x.other.empty())
-    std::cerr << file << ": --check: the problem has no [expect] to check\n";
+  if (check && x.empty()) std::cerr << file << ": --check: the problem has no [expect] to check\n";
   if (emptyZeroSet(s))
     std::cerr << file << ": the zero set does not meet the domain (every cell is excluded by "
               << "its bounds): the mesh is empty\n";
@@ -114,13 +113,13 @@ void printDiagnostics(const Summary& s) {
     std::cout << "expect:";
     for (std::size_t i = 0; i < s.expect.size(); ++i) {
       const ExpectCheck& c = s.expect[i];
-      std::cout << (i ? ", " : " ") << c.key << " = " << c.wanted;
+      std::cout << (i ? ", " : " ") << c.key << " = " << expectedText(c);
       if (!c.notComparable.empty())
         std::cout << " not comparable";
       else if (c.ok)
         std::cout << " ok";
       else
-        std::cout << " got " << c.got;
+        std::cout << " got " << gotText(c);
     }
     std::cout << '\n';
   }
@@ -233,6 +232,8 @@ int reportSolve(const SolveOptions& options, const Problem& problem, RunResult& 
             << " boundary edges), " << m.openEnds << " open ends\n"
             << "defects: " << m.branchVertices << " branch vertices, " << m.nonmanifoldEdges
             << " non-manifold edges\n"
+            << "homology: betti " << bettiText(m.betti) << ", over Z/2 " << bettiText(m.bettiZ2)
+            << "\n"
             << "accuracy: max residual " << m.maxResidual << ", max chord error " << m.maxChordError
             << "\n"
             << "time: " << s.tTotal << " s\n";

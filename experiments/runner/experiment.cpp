@@ -187,7 +187,7 @@ class ProgressReport {
 std::pair<std::string, std::string> expectationColumns(const ExperimentProblem& p,
                                                        const Outcome& o) {
   const Expectation& x = p.expect;
-  if (o.status != "ok" || (!x.components && !x.eulerCharacteristic && x.other.empty())) return {};
+  if (o.status != "ok" || x.empty()) return {};
   const std::map<std::string, std::string> values(o.values.begin(), o.values.end());
   // The mesh statistics of the summary (kSummaryFields). A field of the contract (4.3) must be
   // there; an extension (4.5) only when [expect] names it: a summary written before it cannot be
@@ -205,6 +205,17 @@ std::pair<std::string, std::string> expectationColumns(const ExperimentProblem& 
       m.*f.meshStat = std::stoll(it->second);
     } catch (const std::exception&) {
       return {};
+    }
+  }
+  // The Betti numbers: list elements `mesh.betti.0` .. (absent from older summaries).
+  for (auto [list, path] : {std::pair{&m.betti, "mesh.betti."}, {&m.bettiZ2, "mesh.betti_z2."}}) {
+    for (auto it = values.find(path + std::string("0")); it != values.end();
+         it = values.find(path + std::to_string(list->size()))) {
+      try {
+        list->push_back(std::stoll(it->second));
+      } catch (const std::exception&) {
+        return {};
+      }
     }
   }
   const std::vector<ExpectCheck> checks = checkExpectation(x, m, p.k);

@@ -2,6 +2,8 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
+#include <vector>
 
 namespace ndc {
 namespace {
@@ -18,7 +20,36 @@ std::optional<std::int64_t> meshField(const std::string& key, const MeshStats& m
   if (key == "nonmanifold_edges") return m.nonmanifoldEdges;
   if (key == "open_ends") return m.openEnds;
   if (key == "branch_vertices") return m.branchVertices;
+  if (key == "boundary_facets") return m.boundaryFacets;
+  if (key == "nonmanifold_facets") return m.nonmanifoldFacets;
   return std::nullopt;
+}
+
+/// A list as `[1, 2, 1]`.
+std::string listText(const std::vector<long>& values) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < values.size(); ++i)
+    out += (i ? ", " : "") + std::to_string(values[i]);
+  return out + "]";
+}
+
+/// A list key (`betti`, `betti_z2`) compared with the mesh's list of k + 1 numbers.
+ExpectCheck checkList(const std::string& key, const std::vector<long>& wanted, const MeshStats& m,
+                      int k) {
+  ExpectCheck c;
+  c.key = key;
+  c.isList = true;
+  c.wantedList = wanted;
+  const std::vector<std::int64_t>& got = key == "betti" ? m.betti : m.bettiZ2;
+  if (got.empty())
+    c.notComparable = "the mesh has no Betti numbers (a summary written before them)";
+  else if (wanted.size() != got.size())
+    c.notComparable = key + " needs k + 1 = " + std::to_string(k + 1) + " numbers, it has " +
+                      std::to_string(wanted.size());
+  if (!c.notComparable.empty()) return c;
+  c.gotList.assign(got.begin(), got.end());
+  c.ok = c.gotList == c.wantedList;
+  return c;
 }
 
 ExpectCheck check(const std::string& key, long wanted, const MeshStats& m, int k) {
@@ -65,6 +96,7 @@ std::vector<ExpectCheck> checkExpectation(const Expectation& expect, const MeshS
   if (expect.eulerCharacteristic)
     checks.push_back(check("euler_characteristic", *expect.eulerCharacteristic, mesh, k));
   for (const auto& [key, wanted] : expect.other) checks.push_back(check(key, wanted, mesh, k));
+  for (const auto& [key, wanted] : expect.lists) checks.push_back(checkList(key, wanted, mesh, k));
   return checks;
 }
 
@@ -74,10 +106,22 @@ bool expectationMismatch(const std::vector<ExpectCheck>& checks) {
   return false;
 }
 
+std::string expectedText(const ExpectCheck& c) {
+  return c.isList ? listText(c.wantedList) : std::to_string(c.wanted);
+}
+
+std::string gotText(const ExpectCheck& c) {
+  return c.isList ? listText(c.gotList) : std::to_string(c.got);
+}
+
+std::string bettiText(const std::vector<std::int64_t>& betti) {
+  return listText(std::vector<long>(betti.begin(), betti.end()));
+}
+
 std::string describeCheck(const ExpectCheck& c) {
-  const std::string head = "expect " + c.key + " = " + std::to_string(c.wanted);
+  const std::string head = "expect " + c.key + " = " + expectedText(c);
   if (!c.notComparable.empty()) return head + ": not comparable (" + c.notComparable + ")";
-  return head + ", got " + std::to_string(c.got);
+  return head + ", got " + gotText(c);
 }
 
 }  // namespace ndc

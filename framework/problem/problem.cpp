@@ -340,6 +340,22 @@ std::string TomlReader::format(double v) {
   return s.str();
 }
 
+std::vector<long> TomlReader::expectList(const std::string& key, const toml::node& value) const {
+  // A list key (`betti`): an array of non-negative integers, one per dimension 0 .. k.
+  const toml::array* array = value.as_array();
+  if (!array || array->empty())
+    fail(value,
+         "expect." + key + " must be a non-empty array of integers, not " + tomlTypeName(value));
+  std::vector<long> list;
+  for (const toml::node& element : *array) {
+    const auto* i = element.as_integer();
+    if (!i || i->get() < 0)
+      fail(element, "expect." + key + " must hold non-negative integers (b_0 .. b_k)");
+    list.push_back(static_cast<long>(i->get()));
+  }
+  return list;
+}
+
 Expectation TomlReader::expectOf(const toml::node& node) const {
   const toml::table* table = node.as_table();
   if (!table) fail(node, "expect must be a table, not " + tomlTypeName(node));
@@ -355,6 +371,10 @@ Expectation TomlReader::expectOf(const toml::node& node) const {
       fail(key.source(), "unknown key '" + k + "' in expect" +
                              didYouMean(k, {kExpectKeys.begin(), kExpectKeys.end()}) +
                              " (known: " + known + ")");
+    }
+    if (std::find(kExpectListKeys.begin(), kExpectListKeys.end(), k) != kExpectListKeys.end()) {
+      expect.lists[k] = expectList(k, value);
+      continue;
     }
     const auto* i = value.as_integer();
     if (!i) fail(value, "expect." + k + " must be an integer, not " + tomlTypeName(value));

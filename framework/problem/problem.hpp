@@ -23,6 +23,12 @@ struct Expectation {
   std::optional<long> eulerCharacteristic;
   /// Every other integer key of `[expect]`, by name (e.g. `genus`, `boundary_edges`).
   std::map<std::string, long> other;
+  /// The list keys of `[expect]` (`betti`, `betti_z2`), by name.
+  std::map<std::string, std::vector<long>> lists;
+  /// Whether the table has no key at all.
+  bool empty() const {
+    return !components && !eulerCharacteristic && other.empty() && lists.empty();
+  }
 };
 
 struct ApplicationData;  // framework/problem/application.hpp

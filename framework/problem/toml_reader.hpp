@@ -40,6 +40,8 @@ class TomlReader {
                 const std::string& what) const;
   /// The `[expect]` table.
   Expectation expectOf(const toml::node& node) const;
+  /// The value of a list key of `[expect]` (`betti`): non-negative integers.
+  std::vector<long> expectList(const std::string& key, const toml::node& value) const;
   /// Shortest round-trip text of a double.
   static std::string format(double v);
 
