@@ -7,7 +7,9 @@
 #include <cmath>
 #include <filesystem>
 #include <string_view>
+#include <utility>
 
+#include "framework/io/io.hpp"
 #include "framework/problem/budget.hpp"
 #include "pipeline/pipeline.hpp"
 #include "strategies/bounding/bounding.hpp"
@@ -105,6 +107,13 @@ void validateSolveOptions(SolveOptions& o) {
 
 void validateSolveOptions(const SolveOptions& o, const Problem& problem) {
   checkDepths(o.settings.depth, o.settings.maxDepth, problem.n(), problem.path);
+  // A mesh file whose cells cannot hold a k-simplex is refused before the work
+  // (docs/contracts.md 4.4).
+  for (const auto& [asked, flag] :
+       {std::pair{o.vtk, "--vtk"}, std::pair{o.legacyVtk, "--vtk-legacy"},
+        std::pair{o.obj, "--obj"}})
+    if (const std::string refusal = formatRefusal(flag, problem.k()); asked && !refusal.empty())
+      throw InputError(problem.path + ": " + refusal);
 }
 
 }  // namespace ndc

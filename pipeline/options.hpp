@@ -54,7 +54,8 @@ inline constexpr int kMaxThreads = 4096;
 void validateSolveOptions(SolveOptions& options);
 
 /// Checks the options against the loaded problem (the depth must fit the cell index for n
-/// variables); throws UsageError.
+/// variables); throws UsageError, or InputError naming the problem file for a mesh format that
+/// cannot hold its dimension k (formatRefusal: `--vtk` for k >= 4, `--obj` for k >= 3).
 void validateSolveOptions(const SolveOptions& options, const Problem& problem);
 
 }  // namespace ndc

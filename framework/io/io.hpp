@@ -20,8 +20,9 @@ enum class PlyFormat { binary, ascii };
 
 /// Writes the mesh as PLY: vertices with float64 `x y z` (the first three coordinates,
 /// zero-padded for n = 2, or an application's image in R^3), `u0 .. u{n-1}` (and `x2 y2 z2` for
-/// an application with a second image); `face` with `list uchar int vertex_indices` (k = 2) or
-/// `edge` with `int vertex1, vertex2` (k = 1). Binary data goes out in one write per element.
+/// an application with a second image); `face` with `list uchar int vertex_indices` (k >= 2: a
+/// triangle, a tetrahedron for k = 3, k + 1 indices for any k) or `edge` with `int vertex1,
+/// vertex2` (k = 1). Binary data goes out in one write per element.
 void writePly(std::ostream& out, const RunResult& result, PlyFormat format = PlyFormat::binary);
 
 /// Writes an application's input surfaces (`input.ply`): vertices `x y z`, faces with
@@ -35,7 +36,8 @@ void writeRuledPly(std::ostream& out, const RunResult& result,
                    PlyFormat format = PlyFormat::binary);
 
 /// Writes the mesh as VTK XML, an `UnstructuredGrid` for ParaView and meshio (`mesh.vtu`,
-/// `--vtk`): the points `x y z` of mesh.ply, triangles (k = 2) or lines (k = 1), the point data
+/// `--vtk`): the points `x y z` of mesh.ply, VTK_TETRA (k = 3), VTK_TRIANGLE (k = 2) or VTK_LINE
+/// (k = 1) cells (InputError for k >= 4: formatRefusal), the point data
 /// `u0 .. u{n-1}` (and `x2 y2 z2`), the same coordinates once more under the problem's variable
 /// names (where they repeat no other name) and `singular` (1 at the vertex nearest to a located
 /// singular point, within one edge length), the cell data `class` (of the base solution cell
@@ -47,12 +49,19 @@ void writeVtk(std::ostream& out, const RunResult& result, PlyFormat format = Ply
 /// Writes the mesh as legacy VTK (`mesh.vtk`, `--vtk-legacy`; `# vtk DataFile Version 4.2`,
 /// ASCII, an UNSTRUCTURED_GRID): the points, cells and arrays of writeVtk, the arrays as FIELD
 /// data. A format that meshio reads curves from besides VTU (its PLY reader knows no `edge`
-/// element and its OBJ reader no `l` record).
+/// element and its OBJ reader no `l` record). InputError for k >= 4, as writeVtk.
 void writeLegacyVtk(std::ostream& out, const RunResult& result);
 
 /// Writes the mesh as Wavefront OBJ (`mesh.obj`, `--obj`): `v x y z` per vertex as in mesh.ply,
-/// then `f a b c` (k = 2) or `l a b` (k = 1) with 1-based vertex numbers.
+/// then `f a b c` (k = 2) or `l a b` (k = 1) with 1-based vertex numbers. InputError for k >= 3
+/// (formatRefusal).
 void writeObj(std::ostream& out, const RunResult& result);
+
+/// Why the mesh file of option `flag` (`--vtk`, `--vtk-legacy`, `--obj`) cannot hold a mesh of
+/// dimension k, as one sentence starting with `flag`; empty when it can. VTK's cells end at the
+/// tetrahedron (k <= 3), OBJ has points, lines and faces (k <= 2); mesh.ply holds any k.
+/// `solve` refuses such an option before its work (exit status 2), the writers throw.
+std::string formatRefusal(const std::string& flag, int k);
 
 /// Writes cells.csv: cell number, multi-index, centre, class, projected point.
 void writeCellsCsv(std::ostream& out, const RunResult& result);
@@ -116,11 +125,12 @@ void armTimeout(double seconds, const std::string& line, int status);
 void disarmTimeout();
 
 /// A mesh read back from a `mesh.ply` (docs/contracts.md 4.4): per vertex `x y z` and the
-/// point in R^n (`u0 .. u{n-1}`), and segments (k = 1) or triangles (k = 2) as vertex indices.
+/// point in R^n (`u0 .. u{n-1}`), and the simplices as vertex indices: segments (k = 1),
+/// triangles (k = 2), k + 1 indices for any k.
 struct PlyMesh {
   std::vector<std::array<double, 3>> xyz;   ///< the 3-D image of each vertex
   std::vector<std::vector<double>> u;       ///< the point in R^n of each vertex
-  std::vector<std::vector<int>> simplices;  ///< segments or triangles
+  std::vector<std::vector<int>> simplices;  ///< k + 1 vertex indices each
 };
 
 /// Reads a PLY as writePly writes it (e.g. `mesh.ply` of `ndcontour solve`), ASCII or

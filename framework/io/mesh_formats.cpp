@@ -1,5 +1,6 @@
 // The mesh in the formats of other tools (docs/contracts.md 4.4): VTK XML (mesh.vtu, for
-// ParaView and meshio) and Wavefront OBJ (mesh.obj).
+// ParaView and meshio), legacy VTK (mesh.vtk) and Wavefront OBJ (mesh.obj), each for the
+// dimensions k its cells can hold (formatRefusal).
 #include <zlib.h>
 
 #include <algorithm>
@@ -20,6 +21,7 @@
 #include "framework/io/variable_names.hpp"
 #include "framework/io/vertex_rows.hpp"
 #include "framework/util/base64.hpp"
+#include "framework/util/errors.hpp"
 
 namespace ndc {
 
@@ -33,6 +35,14 @@ void put(std::ostream& out, double v) {
 }
 
 std::size_t simplexCount(const RunResult& r) { return r.simplices.size() / (r.k + 1); }
+
+/// The VTK cell type of a k-simplex: VTK_LINE, VTK_TRIANGLE or VTK_TETRA. For k >= 4, which
+/// VTK has no cell for, InputError naming `file` and the option `flag` that asked for it.
+std::uint8_t vtkCellType(int k, const char* file, const char* flag) {
+  const std::string refusal = formatRefusal(flag, k);
+  if (!refusal.empty()) throw InputError(std::string(file) + ": " + refusal);
+  return k == 1 ? 3 : k == 2 ? 5 : 10;
+}
 
 /// The longest edge of the mesh (max-norm in R^n): the scale within which a vertex stands for a
 /// point of M.
@@ -236,6 +246,7 @@ std::string vtkComment(const RunResult& r) {
 }  // namespace
 
 void writeVtk(std::ostream& out, const RunResult& r, PlyFormat format) {
+  const std::uint8_t cellType = vtkCellType(r.k, "mesh.vtu", "--vtk");
   VertexRows rows(r);
   const std::size_t points = rows.count(), count = simplexCount(r);
   const int width = r.k + 1;
@@ -275,8 +286,7 @@ void writeVtk(std::ostream& out, const RunResult& r, PlyFormat format) {
   std::vector<std::int64_t> offsets(count);
   for (std::size_t s = 0; s < count; ++s) offsets[s] = static_cast<std::int64_t>((s + 1) * width);
   arrays.write("Int64", "offsets", offsets);
-  arrays.write("UInt8", "types",
-               std::vector<std::uint8_t>(count, r.k == 1 ? 3 : 5));  // LINE, TRIANGLE
+  arrays.write("UInt8", "types", std::vector<std::uint8_t>(count, cellType));
   out << "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
 }
 
@@ -298,6 +308,7 @@ void legacyArray(std::ostream& out, const std::string& name, const std::vector<T
 }  // namespace
 
 void writeLegacyVtk(std::ostream& out, const RunResult& r) {
+  const int cellType = vtkCellType(r.k, "mesh.vtk", "--vtk-legacy");
   VertexRows rows(r);
   const std::size_t points = rows.count(), count = simplexCount(r);
   const int width = r.k + 1;
@@ -317,7 +328,7 @@ void writeLegacyVtk(std::ostream& out, const RunResult& r) {
       out << (c == 2 ? '\n' : ' ');
     }
   }
-  // The simplices: each its vertex count and vertices; VTK_LINE or VTK_TRIANGLE.
+  // The simplices: each its vertex count and vertices; VTK_LINE, VTK_TRIANGLE or VTK_TETRA.
   out << "CELLS " << count << ' ' << count * (width + 1) << '\n';
   for (std::size_t s = 0; s < count; ++s) {
     out << width;
@@ -325,7 +336,7 @@ void writeLegacyVtk(std::ostream& out, const RunResult& r) {
     out << '\n';
   }
   out << "CELL_TYPES " << count << '\n';
-  for (std::size_t s = 0; s < count; ++s) out << (r.k == 1 ? 3 : 5) << '\n';
+  for (std::size_t s = 0; s < count; ++s) out << cellType << '\n';
   // The arrays of mesh.vtu, by the same names.
   const auto arrays = coordinateArrays(r, rows.second());
   out << "POINT_DATA " << points << "\nFIELD FieldData " << arrays.size() + 1 << '\n';
@@ -337,6 +348,8 @@ void writeLegacyVtk(std::ostream& out, const RunResult& r) {
 }
 
 void writeObj(std::ostream& out, const RunResult& r) {
+  const std::string refusal = formatRefusal("--obj", r.k);
+  if (!refusal.empty()) throw InputError("mesh.obj: " + refusal);
   VertexRows rows(r);
   out << "# ndcontour " << NDC_VERSION << " problem " << r.summary.problem << ": v is x y z as in "
       << "mesh.ply (the coordinates in R^n are in mesh.ply and mesh.vtu)\n";
@@ -354,6 +367,19 @@ void writeObj(std::ostream& out, const RunResult& r) {
     for (int t = 0; t < width; ++t) out << ' ' << r.simplices[s * width + t] + 1;  // 1-based
     out << '\n';
   }
+}
+
+std::string formatRefusal(const std::string& flag, int k) {
+  const std::string simplex = "a " + std::to_string(k) + "-simplex (k = " + std::to_string(k) + ")";
+  if ((flag == "--vtk" || flag == "--vtk-legacy") && k >= 4)
+    return flag + ": VTK has no cell for " + simplex +
+           ", its cells end at the tetrahedron (k = 3); mesh.ply holds the mesh (k + 1 vertex "
+           "indices per face, docs/contracts.md 4.4)";
+  if (flag == "--obj" && k >= 3)
+    return flag + ": OBJ has no cell for " + simplex +
+           ", only points, lines and faces (k <= 2); mesh.ply holds the mesh" +
+           (k == 3 ? ", and --vtk writes its tetrahedra" : "");
+  return "";
 }
 
 }  // namespace ndc
