@@ -417,6 +417,35 @@ Result solve(const py::object& problemArg, const py::object& progressArg,
   return Result{std::move(run), problem.variables};
 }
 
+/// For tests: a Result holding the given mesh, as a solve would (docs/python.md, "For tests"):
+/// `vertices` (N, n) and `simplices` (M, k + 1) with 1 <= k < n; the summary holds n, k, the
+/// name, the variables and the vertex count, and says the topology is not certified.
+Result resultFromArrays(
+    const py::array_t<double, py::array::c_style | py::array::forcecast>& v,
+    const py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>& s,
+    const std::vector<std::string>& variables, const std::string& problem) {
+  // The shapes: n columns of vertices, k + 1 of simplices, indices in range, names per column.
+  if (v.ndim() != 2 || s.ndim() != 2 || v.shape(1) < 2 || s.shape(1) < 2 || s.shape(1) > v.shape(1))
+    throw py::value_error(
+        "_result_from_arrays: vertices (N, n) and simplices (M, k + 1), 1 <= k < n");
+  if (!variables.empty() && static_cast<py::ssize_t>(variables.size()) != v.shape(1))
+    throw py::value_error("_result_from_arrays: one variable name per column of vertices");
+  auto run = std::make_shared<ndc::RunResult>();
+  run->n = run->summary.n = static_cast<int>(v.shape(1));
+  run->k = run->summary.k = static_cast<int>(s.shape(1)) - 1;
+  run->summary.problem = problem;
+  run->summary.variables = variables;
+  run->summary.mesh.vertices = v.shape(0);
+  run->summary.topology.reason = "a mesh given as arrays, not a solve";
+  run->vertices.assign(v.data(), v.data() + v.size());
+  for (py::ssize_t i = 0; i < s.size(); ++i) {
+    if (s.data()[i] < 0 || s.data()[i] >= v.shape(0))
+      throw py::value_error("_result_from_arrays: vertex index out of range");
+    run->simplices.push_back(static_cast<std::int32_t>(s.data()[i]));
+  }
+  return Result{std::move(run), variables};
+}
+
 std::string oneLine(std::string s) {
   for (char& c : s)
     if (c == '\n' || c == '\r') c = ' ';
@@ -460,12 +489,12 @@ PYBIND11_MODULE(_core, m) {
           "Number of variables (the ambient dimension).")
       .def_property_readonly(
           "k", [](const Result& r) { return r.run->k; },
-          "Dimension of the manifold: 1 (polyline) or 2 (triangles).")
+          "Dimension of the manifold: 1 (polyline), 2 (triangles), 3 (tetrahedra), ...")
       .def_property_readonly("vertices", &Result::vertices,
                              "Welded vertices, an (N, n) float64 array.")
       .def_property_readonly("simplices", &Result::simplices,
-                             "Segments (k = 1) or triangles (k = 2): an (M, k + 1) int64 array "
-                             "of vertex rows.")
+                             "The k-simplices as an (M, k + 1) int64 array of vertex rows: "
+                             "segments (k = 1), triangles (k = 2), tetrahedra (k = 3), ...")
       .def_property_readonly("image", &Result::image,
                              "The point in R^3 of each vertex, an (N, 3) float64 array: an "
                              "application's image (the bisector, the blend surface, ...), else "
@@ -484,7 +513,8 @@ PYBIND11_MODULE(_core, m) {
            py::arg("obj") = false,
            "Writes the files of `ndcontour solve --out DIR` (binary PLY and VTU unless ascii; "
            "cells.csv with cells, mesh.vtu with vtk, mesh.vtk (legacy VTK, which meshio reads "
-           "curves from) with vtk_legacy, mesh.obj with obj) and returns their paths.")
+           "curves from) with vtk_legacy, mesh.obj with obj) and returns their paths. "
+           "InputError for vtk or vtk_legacy with k >= 4 and obj with k >= 3 (no such cells).")
       .def("__repr__", [](const Result& r) {
         const auto& mesh = r.run->summary.mesh;
         return "<ndcontour.Result " + r.run->summary.problem + ": n = " + std::to_string(r.run->n) +
@@ -494,6 +524,11 @@ PYBIND11_MODULE(_core, m) {
                (r.run->summary.topology.certified ? "certified" : "not certified") + ">";
       });
 
+  m.def("_result_from_arrays", &resultFromArrays, py::arg("vertices"), py::arg("simplices"),
+        py::arg("variables") = std::vector<std::string>(), py::arg("problem") = "arrays",
+        "For tests: a Result of the mesh given (vertices (N, n), simplices (M, k + 1)), whose "
+        "write() writes the mesh files of a solve; its summary holds only n, k, the name, the "
+        "variables and the vertex count (docs/python.md).");
   m.def("solve", &solve, py::arg("problem"), py::arg("progress"),
         "The pipeline behind ndcontour.solve (use that: it has the signature and the defaults). "
         "progress is None or a callable(stage: str, fraction: float).");

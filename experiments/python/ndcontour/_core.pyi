@@ -23,7 +23,8 @@ class Result:
     @property
     def vertices(self) -> npt.NDArray[np.float64]: ...
     @property
-    def simplices(self) -> npt.NDArray[np.int64]: ...
+    def simplices(self) -> npt.NDArray[np.int64]:
+        """The k-simplices, (M, k + 1) vertex rows: segments, triangles, tetrahedra, ..."""
     @property
     def image(self) -> npt.NDArray[np.float64]: ...
     @property
@@ -35,6 +36,9 @@ class Result:
     def write(self, dir: Any, *, ascii: bool = False, cells: bool = False, vtk: bool = False,
               vtk_legacy: bool = False, obj: bool = False) -> List[str]: ...
 
+def _result_from_arrays(vertices: npt.ArrayLike, simplices: npt.ArrayLike,
+                        variables: List[str] = ..., problem: str = ...) -> Result:
+    """For tests: a Result of the mesh given (vertices (N, n), simplices (M, k + 1))."""
 def solve(problem: Any, progress: Optional[Callable[[str, float], None]],
           **options: Any) -> Result: ...
 def defaults() -> Dict[str, Any]: ...

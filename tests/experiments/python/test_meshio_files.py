@@ -1,19 +1,25 @@
 """The mesh files as meshio (Debian python3-meshio 5.x) reads them (ctest "python";
 docs/contracts.md 4.4): the binary, zlib-compressed mesh.vtu and the ASCII one of --ascii give
 the same numbers; a curve is read from mesh.vtk (legacy VTK) as well as mesh.vtu; every file
-carries the problem's variable names beside u0 ..; `solve` runs as a process."""
+carries the problem's variable names beside u0 ..; `solve` runs as a process. A 3-manifold's
+tetrahedra (VTK_TETRA) are read from both VTK files, written from a mesh given as arrays."""
 
 import json
 import os
 import pathlib
 import subprocess
+import sys
 
 import meshio
+import ndcontour
 import numpy as np
+import pytest
 
 ROOT = pathlib.Path(os.environ.get("NDC_SOURCE_DIR", pathlib.Path(__file__).resolve().parents[3]))
 BINARY = os.environ.get("NDC_BINARY", str(ROOT / "build" / "bin" / "ndcontour"))
 PROBLEMS = ROOT / "experiments" / "problems"
+sys.path.insert(0, str(ROOT / "tests" / "experiments"))
+from sphere_mesh import kuhn_sphere  # noqa: E402 (after its folder is on the path)
 
 
 def solve(out, problem, depth, *extra):
@@ -91,3 +97,25 @@ def test_curve_files(tmp_path):
     # The CSV headers: the contract's columns, then the names.
     header = (out / "singular.csv").read_text().splitlines()[0]
     assert header == "point,sigma_min,u0,u1,u2,u3,u4,x1,x2,x3,x4,x5"
+
+
+def test_tetrahedra_files(tmp_path):
+    """A 3-sphere in R^4 (Kuhn's triangulation of the 4-cube's boundary, tests/experiments/
+    sphere_mesh.py) written by ndcontour's writers: meshio reads tetrahedra from the binary and
+    the ASCII mesh.vtu and from mesh.vtk, the same as the arrays given; --obj is refused."""
+    vertices, simplices = kuhn_sphere(3)
+    result = ndcontour._core._result_from_arrays(np.array(vertices), np.array(simplices),
+                                                 ["x", "y", "z", "w"], "s3")
+    summary = {"variables": ["x", "y", "z", "w"], "mesh": {"vertices": len(vertices)}}
+    for encoding, ascii in (("binary", False), ("ascii", True)):
+        out = tmp_path / encoding
+        result.write(out, ascii=ascii, vtk=True, vtk_legacy=True)
+        for name in ("mesh.vtu", "mesh.vtk"):
+            mesh = meshio.read(out / name)
+            assert [c.type for c in mesh.cells] == ["tetra"], name
+            assert np.array_equal(cells_of(mesh, "tetra"), np.array(simplices)), name
+            assert np.array_equal(mesh.points, np.array(vertices)[:, :3]), name
+            check_arrays(mesh, summary, len(simplices))
+            assert np.array_equal(mesh.point_data["w"], np.array(vertices)[:, 3]), name
+    with pytest.raises(ndcontour.InputError, match="OBJ has no cell for a 3-simplex"):
+        result.write(tmp_path / "obj", obj=True)
