@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <iostream>
+#include <string>
 
 #include "experiments/cli/commands.hpp"
 #include "experiments/view/view.hpp"
@@ -22,10 +23,15 @@ int runView(const ViewOptions& options) {
   const std::filesystem::path out =
       options.out.empty() ? dir / "view.html" : std::filesystem::path(options.out);
   const ndc::view::ViewerStats s = ndc::view::writeViewer(dir, out);
+  // The simplices by their name: segments, triangles, tetrahedra, then k-simplices.
+  const std::string simplices = s.k == 1   ? " segments"
+                                : s.k == 2 ? " triangles"
+                                : s.k == 3 ? " tetrahedra"
+                                           : " " + std::to_string(s.k) + "-simplices";
   std::cout << "wrote " << out.string() << ": n = " << s.n << ", " << s.vertices << " vertices, "
-            << (s.k == 2 ? s.triangles : s.segments) << (s.k == 2 ? " triangles" : " segments")
-            << ", " << s.singular << " singular points, " << s.uncertified
-            << " uncertified simplices in " << s.uncertifiedCells << " uncertified cells\n";
+            << s.simplices << simplices << ", " << s.singular << " singular points, "
+            << s.uncertified << " uncertified simplices in " << s.uncertifiedCells
+            << " uncertified cells\n";
   return kExitOk;
 }
 

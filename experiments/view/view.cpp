@@ -74,9 +74,9 @@ Summary readSummary(const fs::path& file) {
   }
   s.n = summaryInt(fields, "n", file);
   s.k = summaryInt(fields, "k", file);
-  if (s.n < 2 || s.n > 64 || s.k < 1 || s.k > 2 || s.k >= s.n)
-    throw InputError(file.string() + ": n = " + std::to_string(s.n) + ", k = " +
-                     std::to_string(s.k) + " (expected 2 <= n <= 64 and k = 1 or 2, k < n)");
+  if (s.n < 2 || s.n > 64 || s.k < 1 || s.k >= s.n)
+    throw InputError(file.string() + ": n = " + std::to_string(s.n) +
+                     ", k = " + std::to_string(s.k) + " (expected 2 <= n <= 64 and 1 <= k < n)");
   const std::string prefix = "diagnostics.singular_points.";
   for (const auto& field : fields)
     if (field.first.starts_with(prefix) && field.first.ends_with(".sigma_min")) ++s.singular;
@@ -240,7 +240,8 @@ PageMesh readPage(const fs::path& resultDir, const Summary& summary, ViewerStats
   stats.n = summary.n;
   stats.k = summary.k;
   stats.vertices = mesh.xyz.size();
-  (summary.k == 2 ? stats.triangles : stats.segments) = mesh.simplices.size();
+  stats.simplices = mesh.simplices.size();
+  if (summary.k <= 2) (summary.k == 2 ? stats.triangles : stats.segments) = stats.simplices;
   stats.uncertified = static_cast<std::size_t>(
       std::count(page.uncertified.begin(), page.uncertified.end(), std::uint8_t{1}));
   stats.singular = summary.singular;

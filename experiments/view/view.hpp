@@ -4,7 +4,8 @@
 /// so that the page needs no network and no other file. The page projects R^n to 3-D (three
 /// chosen coordinates, or a rotation of R^n in chosen planes, or an animated grand tour),
 /// colours by any coordinate, and marks the singular points of summary.json and the simplices
-/// that lie in an uncertified cell of uncertified.csv.
+/// that lie in an uncertified cell of uncertified.csv. A k-manifold for k >= 3 is shown by a
+/// slice (its k-simplices cut by a hyperplane u_j = t the reader moves) or by its edges.
 #pragma once
 
 #include <cstddef>
@@ -16,8 +17,9 @@ namespace ndc::view {
 /// What writeViewer put into the page.
 struct ViewerStats {
   int n = 0;                         ///< the dimension of the ambient space
-  int k = 0;                         ///< the manifold's dimension: 1 curve, 2 surface
+  int k = 0;                         ///< the manifold's dimension: 1 curve, 2 surface, ..
   std::size_t vertices = 0;          ///< vertices of mesh.ply
+  std::size_t simplices = 0;         ///< k-simplices of mesh.ply (any k)
   std::size_t triangles = 0;         ///< faces of mesh.ply (k = 2)
   std::size_t segments = 0;          ///< edges of mesh.ply (k = 1)
   std::size_t uncertified = 0;       ///< simplices whose centroid lies in a box of uncertified.csv

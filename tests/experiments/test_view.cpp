@@ -149,3 +149,30 @@ TEST_CASE("view: bad input exits 2 with one line and leaves an earlier page alon
       view(quoted(good.string()) + " --out " + quoted((scratch() / "no/such/dir/v.html").string())),
       ndc::view::viewerAvailable() ? "v.html: cannot write" : "scripts/setup.sh");
 }
+
+TEST_CASE("view: a 3-manifold's page (k = 3), and k >= n refused", "[view][cli][simplices]") {
+  // Two tetrahedra in R^4 sharing a triangle, as `solve --ascii` writes them.
+  std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 5\nproperty double x\nproperty double y\nproperty "
+      "double z\n";
+  for (int j = 0; j < 4; ++j) ply += "property double u" + std::to_string(j) + "\n";
+  ply += "element face 2\nproperty list uchar int vertex_indices\nend_header\n";
+  for (const char* row :
+       {"0 0 0 0 0 0 0", "1 0 0 1 0 0 0", "0 1 0 0 1 0 0", "0 0 1 0 0 1 0", "0 0 0 0 0 0 1"})
+    ply += std::string(row) + "\n";
+  ply += "4 0 1 2 3\n4 0 1 2 4\n";
+  const std::string summary = "{\"problem\": \"two-tets\", \"n\": 4, \"k\": 3}";
+  const fs::path dir = resultDir("tets", {{"mesh.ply", ply}, {"summary.json", summary}});
+  const ndc::test::CliRun run = view(quoted(dir.string()));
+  if (ndc::view::viewerAvailable()) {
+    INFO(run.err);
+    REQUIRE(run.status == 0);
+    CHECK(run.out.find("n = 4, 5 vertices, 2 tetrahedra") != std::string::npos);
+    CHECK(slurp(dir / "view.html").find("\"k\": 3") != std::string::npos);
+  }
+  // k must be below n: a 3-manifold is not in R^3.
+  checkBadInput(
+      view(quoted(
+          resultDir("kn", {{"mesh.ply", ply}, {"summary.json", "{\"n\": 3, \"k\": 3}"}}).string())),
+      "(expected 2 <= n <= 64 and 1 <= k < n)");
+}

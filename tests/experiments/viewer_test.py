@@ -18,7 +18,12 @@ copies it into #ndc-view-state) and checks:
   components equals summary.json's mesh.components; `#colour=plain` in the address;
 - the PNG export (`#png` in the address: the page publishes the canvas as a PNG data URL): a
   PNG of the canvas' size, in which the mesh covers pixels outside the triad's corner;
-- an empty result: a message saying that the zero set does not meet the domain.
+- an empty result: a message saying that the zero set does not meet the domain;
+- k >= 3 (a 3-sphere in R^4 and a 4-sphere in R^5 given as mesh.ply and summary.json, Kuhn's
+  triangulation of the cube's boundary, tests/experiments/sphere_mesh.py): the slice by the
+  hyperplane through the middle of the last coordinate draws as many triangles (k = 3) or
+  segments (k = 4) as the cut computed here, the skeleton (#mode=skeleton) every edge once; the
+  first view is the plain coordinates; the page says k and counts the simplices.
 With --keep the screenshots (whole page) and the exported PNGs are kept.
 """
 import base64
@@ -33,8 +38,11 @@ import subprocess
 import sys
 import tempfile
 import zlib
+from itertools import combinations
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from sphere_mesh import ascii_ply, kuhn_sphere  # noqa: E402 (after its folder is on the path)
 EMPTY = """name = "empty"
 description = "A sphere of radius 1 centred 3 away from the domain: M does not meet it."
 variables = ["p", "q", "r"]
@@ -46,6 +54,10 @@ CASES = [  # (name, problem, solve options, the page's address suffix, strip sum
     ("clifford", "clifford-torus.toml", ["--depth", "3"], "#png", False),
     ("circle-r5", "circle-r5.toml", ["--depth", "3"], "#png&colour=plain", True),
     ("empty", None, ["--depth", "3"], "", False),
+    # k >= 3: no solve, a sphere given as files (k, the cube's cells per edge)
+    ("s3-slice", (3, 3), [], "#png", False),
+    ("s3-skeleton", (3, 3), [], "#png&mode=skeleton", False),
+    ("s4-slice", (4, 2), [], "#png", False),
 ]
 WIDTH, HEIGHT, TRIAD = 1000, 700, 170  # the window; the triad's corner (150 px and margins)
 FLAGS = ["--headless=new", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
@@ -197,7 +209,7 @@ def check_rotation(state, name):
     d = len(R)
     i, j = controls["plane"]
     angle = controls["angle"]
-    if angle != (30 if d > 3 else 0) or controls["angleText"] != f"{angle}°":
+    if angle != (30 if d > 3 and state["k"] < 3 else 0) or controls["angleText"] != f"{angle}°":
         fail(f"{name}: the slider reads {angle} ({controls['angleText']!r})")
     c, s = math.cos(math.radians(angle)), math.sin(math.radians(angle))
     want = [[float(r == col) for col in range(d)] for r in range(d)]
@@ -206,6 +218,78 @@ def check_rotation(state, name):
     if max(abs(R[r][col] - want[r][col]) for r in range(d) for col in range(d)) > 1e-9:
         fail(f"{name}: R = {R}, but the controls (plane {i}-{j}, {angle} degrees) give {want}")
     return f"plane {state['names'][i]}-{state['names'][j]} at {angle} deg"
+
+
+def write_sphere(out, k, g):
+    """A result folder of a k-sphere in R^(k+1) without a solve: mesh.ply as `solve --ascii`
+    writes it and the summary fields the page reads."""
+    names = ["x", "y", "z", "w", "v"][:k + 1]
+    vertices, simplices = kuhn_sphere(k, g)
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "mesh.ply"), "w") as f:
+        f.write(ascii_ply(vertices, simplices, f"s{k}", names))
+    summary = {"schema": "ndcontour.summary/1", "problem": f"s{k}", "n": k + 1, "k": k,
+               "variables": names, "mesh": {"vertices": len(vertices), "components": 1},
+               "diagnostics": {"singular_points": []}, "topology": {"certified": True}}
+    with open(os.path.join(out, "summary.json"), "w") as f:
+        json.dump(summary, f)
+
+
+def float32(x):
+    return struct.unpack("f", struct.pack("f", x))[0]
+
+
+def expected_cut(out, k):
+    """What the page's slice draws at its first view: the simplices cut by u_{n-1} = t, t the
+    middle of the float32 coordinates' range, as the page computes it: for k = 3 one triangle
+    per tetrahedron with one vertex apart and two for a quad, for k > 3 a segment per cut
+    triangle of each simplex. Also the distinct edges (the skeleton)."""
+    lines = open(os.path.join(out, "mesh.ply")).read().splitlines()
+    head = lines.index("end_header")
+    counts = {w[1]: int(w[2]) for w in (line.split() for line in lines[:head]) if w[0] == "element"}
+    rows = lines[head + 1:]
+    last = [float32(float(row.split()[-1])) for row in rows[:counts["vertex"]]]
+    simplices = [[int(x) for x in row.split()[1:]] for row in rows[counts["vertex"]:]]
+    lo, hi = min(last), max(last)
+    t = lo + (hi - lo) * 500 / 1000
+    pieces = cut = 0
+    for s in simplices:
+        above = [last[v] - t > 0 for v in s]
+        if not 0 < sum(above) < len(s):
+            continue
+        cut += 1
+        if k == 3:
+            pieces += 2 if sum(above) == 2 else 1
+        else:
+            pieces += sum(1 for tri in combinations(range(len(s)), 3)
+                          if len({above[m] for m in tri}) == 2)
+    edges = {tuple(sorted(e)) for s in simplices for e in combinations(s, 2)}
+    return len(simplices), cut, pieces, len(edges)
+
+
+def check_higher(state, out, name):
+    """k >= 3: the page's counts, mode and slice against mesh.ply."""
+    k = state["k"]
+    simplices, cut, pieces, edges = expected_cut(out, k)
+    mode = "skeleton" if "skeleton" in name else "slice"
+    want = {"simplices": simplices, "mode": mode, "skeletonEdges": edges,
+            "triangles": pieces if mode == "slice" and k == 3 else 0,
+            "segments": edges if mode == "skeleton" else pieces if k > 3 else 0}
+    got = {key: state.get(key) for key in want}
+    if got != want:
+        fail(f"{name}: the page drew {got}, mesh.ply gives {want}")
+    slice_ = state["slice"]
+    if slice_["axis"] != state["names"][-1] or slice_["simplices"] != cut:
+        fail(f"{name}: the slice {slice_}, expected {cut} simplices cut along "
+             f"{state['names'][-1]}")
+    # The colour: u3, or the one before it when the slice is along u3 (k = 3 in R^4).
+    colour = min(3, state["n"] - 1)
+    colour = state["names"][colour - 1 if colour == state["n"] - 1 else colour]
+    if state["colour"] != colour:
+        fail(f"{name}: coloured by {state['colour']!r}, not {colour!r}")
+    drawn = want["triangles"] or want["segments"]
+    return (f"k = {k}, {simplices} simplices, {mode}: {drawn} "
+            f"{'triangles' if want['triangles'] else 'segments'} ({cut} simplices cut)")
 
 
 def check_case(tmp, keep, name, strip, out, chrome):
@@ -218,12 +302,14 @@ def check_case(tmp, keep, name, strip, out, chrome):
     state = view_state(done[0], name)
     summary = json.load(open(os.path.join(out, "summary.json")))
     counts = ply_counts(os.path.join(out, "mesh.ply"))
-    want = {"ready": True, "n": summary["n"], "vertices": counts.get("vertex", 0),
-            "triangles": counts.get("face", 0), "segments": counts.get("edge", 0)}
+    higher = summary["k"] >= 3
+    want = {"ready": True, "n": summary["n"], "k": summary["k"], "vertices": counts.get("vertex", 0)}
+    if not higher:
+        want.update(triangles=counts.get("face", 0), segments=counts.get("edge", 0))
     got = {key: state.get(key) for key in want}
     if got != want:
         fail(f"{name}: the page drew {got}, mesh.ply and summary.json hold {want}")
-    if summary["mesh"]["triangles" if summary["k"] == 2 else "edges"] != max(
+    if not higher and summary["mesh"]["triangles" if summary["k"] == 2 else "edges"] != max(
             want["triangles"], want["segments"]):
         fail(f"{name}: summary.json's mesh disagrees with mesh.ply")
     if state["components"] != summary["mesh"]["components"]:
@@ -242,6 +328,12 @@ def check_case(tmp, keep, name, strip, out, chrome):
         return
     if state["empty"] or state["message"]:
         fail(f"{name}: a message on a page with a mesh: {state['message']!r}")
+    if higher:
+        drew = check_higher(state, out, name)
+        width, height, drawn, colours = check_png(state, name, keep)
+        print(f"viewer: {name}: {drew}; names {named}; first view {turned}; PNG "
+              f"{width}x{height}, {drawn} pixels of {colours} colours")
+        return
     colour = {"two-spheres": "component", "clifford": state["names"][-1],
               "circle-r5": "plain"}[name]
     if state["colour"] != colour:
@@ -266,13 +358,16 @@ def main(argv):
         pages = []
         for name, problem, options, suffix, strip in CASES:
             out = os.path.join(tmp, name)
-            if problem is None:
+            if isinstance(problem, tuple):
+                write_sphere(out, *problem)
+            elif problem is None:
                 problem = os.path.join(tmp, name + ".toml")
                 with open(problem, "w") as f:
                     f.write(EMPTY)
             else:
                 problem = os.path.join(ROOT, "experiments", "problems", problem)
-            run([ndcontour, "solve", problem, *options, "--out", out])
+            if not isinstance(problem, tuple):
+                run([ndcontour, "solve", problem, *options, "--out", out])
             if strip:
                 path = os.path.join(out, "summary.json")
                 summary = json.load(open(path))

@@ -1,6 +1,8 @@
 // The page of `ndcontour view` (docs/viewer.md): reads the mesh and summary.json that the tool
 // embedded, projects R^d to 3-D with an orthogonal matrix R (three rows of R p are shown), draws
 // with three.js and an axis triad of R^d, and publishes what it drew as window.ndcView for tests.
+// A k-manifold for k >= 3 is drawn as a slice (its k-simplices cut by a hyperplane u_j = t) or
+// as its skeleton (every edge).
 (function () {
   'use strict';
   const $ = (id) => document.getElementById(id);
@@ -183,7 +185,22 @@
   for (let s = 0; s < simplices; ++s)
     if (uncertified[s]) for (let m = 0; m < per; ++m) bad.push(indices[s * per + m]);
 
-  let main, overlay, edges = null;
+  /** The distinct edges of the simplices (of those flagged in `which` when given), as pairs. */
+  function edgeList(which) {
+    const seen = new Set(), list = [];
+    for (let s = 0; s < simplices; ++s) {
+      if (which && !which[s]) continue;
+      for (let m = 0; m < per; ++m)
+        for (let l = m + 1; l < per; ++l) {
+          const a = indices[s * per + m], b = indices[s * per + l];
+          const key = Math.min(a, b) * V + Math.max(a, b);
+          if (!seen.has(key)) { seen.add(key); list.push(a, b); }
+        }
+    }
+    return list;
+  }
+
+  let main, overlay, edges = null, skeleton = null;
   if (k === 2) {
     main = new THREE.Mesh(geometry, new THREE.MeshPhongMaterial({
       vertexColors: true, side: THREE.DoubleSide, shininess: 25,
@@ -201,12 +218,27 @@
       color: 0x202020, transparent: true, opacity: 0.35 }));
     edges.visible = false;
     group.add(edges);
-  } else {
+  } else if (k === 1) {
     main = new THREE.LineSegments(geometry, new THREE.LineBasicMaterial({ vertexColors: true }));
     // WebGL lines are one pixel wide: the vertices as dots make a curve easier to see.
     group.add(new THREE.Points(geometry, new THREE.PointsMaterial({
       vertexColors: true, size: 4, sizeAttenuation: false })));
     overlay = new THREE.LineSegments(sharing(bad), new THREE.LineBasicMaterial({ color: UNCERTIFIED }));
+  } else {
+    // k >= 3: the slice (main: triangles for k = 3, the edges of the cut pieces beyond; its
+    // geometry is made by updateSlice) and the skeleton, in the vertices' colours; the edges of
+    // the uncertified simplices in magenta.
+    main = k === 3
+      ? new THREE.Mesh(new THREE.BufferGeometry(), new THREE.MeshPhongMaterial({
+        vertexColors: true, side: THREE.DoubleSide, shininess: 25 }))
+      : new THREE.LineSegments(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ vertexColors: true }));
+    main.frustumCulled = false;
+    const all = sharing(edgeList(null));
+    all.setAttribute('color', colours);
+    skeleton = new THREE.LineSegments(all, new THREE.LineBasicMaterial({
+      vertexColors: true, transparent: true, opacity: 0.6 }));
+    group.add(skeleton);
+    overlay = new THREE.LineSegments(sharing(edgeList(uncertified)), new THREE.LineBasicMaterial({ color: UNCERTIFIED }));
   }
   overlay.renderOrder = 1;
   group.add(main, overlay);
@@ -294,6 +326,95 @@
     });
   }
 
+  // --- k >= 3: the slice by the hyperplane u_j = t -----------------------------------------
+  // Each k-simplex with vertices on both sides (u_j - t > 0 or not) is cut in a (k-1)-piece. For
+  // k = 3 it is a triangle (one vertex apart) or a quad (two and two), drawn as two triangles;
+  // beyond, the piece's edges: where the hyperplane cuts a triangle of the simplex. A point of the
+  // slice lies on a mesh edge (a, b) at the fraction f from a, so its position and its colour
+  // follow a and b (the projection is linear): sliceEnds holds a, b, f per point.
+  let sliceEnds = new Float64Array(0), slicePoints = 0, sliceCut = 0;
+  const sliceAxis = () => +$('sliceAxis').value;  // a coordinate of the page
+  function sliceValue() {
+    const c = sliceAxis();
+    if (!(hi[c] >= lo[c])) return 0;
+    return lo[c] + (hi[c] - lo[c]) * +$('slice').value / 1000;
+  }
+
+  /** The points of the slice u_c = t, three per triangle (k = 3) or two per segment. */
+  function cutSimplices(c, t) {
+    const out = [], value = new Float64Array(per);
+    let s = 0;
+    const point = (m, l) => out.push(indices[s * per + m], indices[s * per + l], value[m] / (value[m] - value[l]));
+    const above = (m) => value[m] > 0;
+    sliceCut = 0;
+    for (; s < simplices; ++s) {
+      let up = 0;
+      for (let m = 0; m < per; ++m) { value[m] = raw[indices[s * per + m] * d + c] - t; up += above(m); }
+      if (up === 0 || up === per) continue;
+      ++sliceCut;
+      if (k === 3) {
+        const ups = [0, 1, 2, 3].filter(above), downs = [0, 1, 2, 3].filter((m) => !above(m));
+        if (ups.length === 2) {  // the quad pu pv qv qu, as two triangles
+          const [p, q] = ups, [u, v] = downs;
+          point(p, u); point(p, v); point(q, v);
+          point(p, u); point(q, v); point(q, u);
+        } else {  // a triangle: the three edges at the vertex apart
+          const [lone, rest] = ups.length === 1 ? [ups[0], downs] : [downs[0], ups];
+          rest.forEach((m) => point(lone, m));
+        }
+        continue;
+      }
+      for (let m = 0; m < per; ++m)  // k >= 4: a segment per triangle m < l < o that is cut
+        for (let l = m + 1; l < per; ++l)
+          for (let o = l + 1; o < per; ++o) {
+            const cut = [[m, l], [l, o], [m, o]].filter(([x, y]) => above(x) !== above(y));
+            if (cut.length === 2) cut.forEach(([x, y]) => point(x, y));
+          }
+    }
+    return out;
+  }
+
+  /** The slice's points where the vertices are drawn now (lerp of their projections). */
+  function placeSlice() {
+    const at = main.geometry.getAttribute('position');
+    if (!at) return;
+    const a = positions.array, out = at.array;
+    for (let i = 0; i < slicePoints; ++i) {
+      const v = sliceEnds[3 * i], w = sliceEnds[3 * i + 1], f = sliceEnds[3 * i + 2];
+      for (let m = 0; m < 3; ++m) out[3 * i + m] = (1 - f) * a[3 * v + m] + f * a[3 * w + m];
+    }
+    at.needsUpdate = true;
+    if (k === 3) main.geometry.computeVertexNormals();
+  }
+
+  /** Cuts the simplices anew at the slider's hyperplane. */
+  function updateSlice() {
+    const c = sliceAxis(), t = sliceValue();
+    sliceEnds = Float64Array.from(cutSimplices(c, t));
+    slicePoints = sliceEnds.length / 3;
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(slicePoints * 3), 3));
+    g.setAttribute('color', new THREE.BufferAttribute(new Float32Array(slicePoints * 3), 3));
+    main.geometry.dispose();
+    main.geometry = g;
+    $('sliceText').textContent = Number.isFinite(t) ? t.toPrecision(3) : '';
+    placeSlice();
+    colourSlice();
+    dirty = true;
+  }
+
+  /** What is drawn as triangles and as segments, and how. */
+  function drawn() {
+    const slice = k >= 3 && $('mode').value === 'slice';
+    const shown = { triangles: k === 2 ? main.geometry.index.count / 3 : k === 3 && slice ? slicePoints / 3 : 0,
+                    segments: k === 1 ? main.geometry.index.count / 2 : k < 3 ? 0
+                      : slice ? (k > 3 ? slicePoints / 2 : 0) : skeleton.geometry.index.count / 2 };
+    if (k >= 3)
+      Object.assign(shown, { mode: $('mode').value, skeletonEdges: skeleton.geometry.index.count / 2,
+        slice: { axis: names[sliceAxis()], value: sliceValue(), simplices: sliceCut } });
+    return shown;
+  }
+
   // --- Updates -----------------------------------------------------------------------------
   let dirty = true;
   function updatePositions() {
@@ -307,6 +428,7 @@
     const place = new THREE.Matrix4();
     cells.forEach((p, i) => { project(p, 0, q, 0); cellMarks.setMatrixAt(i, place.makeTranslation(q[0], q[1], q[2])); });
     cellMarks.instanceMatrix.needsUpdate = true;
+    if (k >= 3) placeSlice();
     updateTriad();
     dirty = true;
   }
@@ -339,8 +461,9 @@
       if (Number.isFinite(lo[c])) { min = lo[c].toPrecision(3); max = hi[c].toPrecision(3); }
     }
     // The maps are sRGB; three.js takes vertex colours as linear and converts them on output.
-    for (let i = 0; i < a.length; ++i) a[i] = a[i] <= 0.04045 ? a[i] / 12.92 : Math.pow((a[i] + 0.055) / 1.055, 2.4);
+    linear(a);
     colours.needsUpdate = true;
+    if (k >= 3) colourSlice();
     $('colormap').disabled = mode === 'component' || mode === 'plain';
     const bar = $('colorbar').getContext('2d');
     for (let x = 0; x < 220; ++x) {
@@ -354,10 +477,36 @@
     dirty = true;
   }
 
+  /** sRGB colours (0 .. 1) made linear, in place. */
+  function linear(a) {
+    for (let i = 0; i < a.length; ++i) a[i] = a[i] <= 0.04045 ? a[i] / 12.92 : Math.pow((a[i] + 0.055) / 1.055, 2.4);
+  }
+
+  /** The slice's colours: a coordinate's value where the point lies, or its edge's component. */
+  function colourSlice() {
+    const at = main.geometry.getAttribute('color');
+    if (!at) return;
+    const mode = $('colorBy').value, map = $('colormap').value, out = at.array;
+    const c = +mode, span = hi[c] > lo[c] ? hi[c] - lo[c] : 1;
+    for (let i = 0; i < slicePoints; ++i) {
+      const v = sliceEnds[3 * i], w = sliceEnds[3 * i + 1], f = sliceEnds[3 * i + 2];
+      out.set(mode === 'component' ? CATEGORIES[component[v] % CATEGORIES.length] : mode === 'plain' ? PLAIN
+        : colourAt(map, ((1 - f) * raw[v * d + c] + f * raw[w * d + c] - lo[c]) / span), 3 * i);
+    }
+    linear(out);
+    at.needsUpdate = true;
+    dirty = true;
+  }
+
   function updateVisibility() {
     markers.forEach((m) => { m.visible = $('showSingular').checked; });
     overlay.visible = cellMarks.visible = $('showUncertified').checked;
     if (edges) edges.visible = $('showWire').checked;
+    if (skeleton) {
+      main.visible = $('mode').value === 'slice';
+      skeleton.visible = !main.visible;
+      showCounts();
+    }
     triadScene.visible = $('showTriad').checked;
     dirty = true;
   }
@@ -376,7 +525,24 @@
   // drawn. `Reset` shows the plain coordinates.
   fillSelect('planeI', 0);
   fillSelect('planeJ', Math.min(3, d - 1));
-  $('angle').value = d > 3 ? 30 : 0;
+  $('angle').value = d > 3 && k < 3 ? 30 : 0;  // k >= 3: the slice shows the plain coordinates
+  // k >= 3: the slice (the default) or the skeleton, #mode= in the address; the hyperplane
+  // u_j = t, j the last coordinate (#slice=NAME) and t the middle of its range (#at=VALUE).
+  if (k >= 3) {
+    $('higher').hidden = false;
+    $('showWire').disabled = true;  // the skeleton is the mode below
+    $('kText').textContent = k;
+    names.forEach((name, j) => { if (j < axes) $('sliceAxis').add(new Option(name, j)); });
+    const wanted = params.get('slice') || '', byName = names.indexOf(wanted);
+    const byU = /^u\d+$/.test(wanted) ? first + +wanted.slice(1) : -1;
+    $('sliceAxis').value = byName >= 0 && byName < axes ? byName : byU >= first && byU < axes ? byU : axes - 1;
+    $('mode').value = params.get('mode') === 'skeleton' ? 'skeleton' : 'slice';
+    const at = parseFloat(params.get('at')), c = sliceAxis();
+    if (Number.isFinite(at) && hi[c] > lo[c]) $('slice').value = Math.round((at - lo[c]) / (hi[c] - lo[c]) * 1000);
+    $('mode').addEventListener('change', updateVisibility);
+    $('sliceAxis').addEventListener('change', () => { $('slice').value = 500; updateSlice(); showCounts(); });
+    $('slice').addEventListener('input', () => { updateSlice(); showCounts(); });
+  }
   // The colour: #colour= in the address, else by component when there are several, else u3
   // (or the last of u0 .. u{n-1}).
   {
@@ -388,8 +554,14 @@
     const byName = names.indexOf(wanted), byU = /^u\d+$/.test(wanted || '') ? first + +wanted.slice(1) : -1;
     s.value = wanted === 'component' || wanted === 'plain' ? wanted
       : byName >= 0 && byName < axes ? byName : byU >= first && byU < axes ? byU
-      : components > 1 ? 'component' : first + Math.min(3, data.n - 1);
+      : components > 1 ? 'component' : colourDefault();
     if (MAPS[params.get('map')]) $('colormap').value = params.get('map');
+  }
+
+  /** u3 (or the last coordinate); for k >= 3 the one before it when the slice is along it. */
+  function colourDefault() {
+    const c = first + Math.min(3, data.n - 1);
+    return k >= 3 && c === sliceAxis() && c > 0 ? c - 1 : c;
   }
 
   const plane = () => [+$('planeI').value, +$('planeJ').value];
@@ -495,18 +667,30 @@
   const bads = uncertified.reduce((a, b) => a + b, 0);
   $('title').textContent = (summary.problem || data.source) + ' (n = ' + data.n + ', k = ' + k + ')';
   $('dim').textContent = d;
+  const simplexName = k === 1 ? 'segments' : k === 2 ? 'triangles' : k === 3 ? 'tetrahedra' : k + '-simplices';
   const rows = [
-    ['vertices', V], [k === 2 ? 'triangles' : 'segments', count],
+    ['vertices', V], [simplexName, count],
     ['components', mesh.components], ['Euler characteristic', mesh.euler_characteristic],
     ['topology', topology.certified === undefined ? '?' :
       topology.certified ? 'certified' : 'not certified' + (topology.reason ? ': ' + topology.reason : '')],
     ['singular points', singular.length], ['uncertified cells', cells.length],
     ['uncertified simplices', bads]];
   $('info').innerHTML = rows.filter((r) => r[1] !== undefined)
-    .map((r) => `<div><b>${r[0]}</b>: ${String(r[1]).replace(/</g, '&lt;')}</div>`).join('');
+    .map((r) => `<div><b>${r[0]}</b>: ${String(r[1]).replace(/</g, '&lt;')}</div>`).join('') +
+    (k >= 3 ? '<div><b>dimension</b>: k = ' + k + ' in R<sup>' + data.n + '</sup></div><div><b>shown</b>: <span id="shown"></span></div>' : '');
+
+  /** k >= 3: what the slice or the skeleton shows, in the panel and in window.ndcView. */
+  function showCounts() {
+    const now = drawn();
+    $('shown').textContent = now.mode === 'skeleton'
+      ? `the skeleton: ${now.segments} edges of the ${count} ${simplexName}`
+      : `the slice ${now.slice.axis} = ${Number(now.slice.value).toPrecision(3)}: ${now.slice.simplices} ` +
+        `${simplexName} cut, ` + (k === 3 ? `${now.triangles} triangles` : `${now.segments} segments`);
+    if (window.ndcView.ready) publish(now);
+  }
   $('singularText').textContent = 'singular point (' + singular.length + ')';
   $('uncertifiedText').textContent = 'uncertified cell (' + cells.length + ': cubes at the centres; ' +
-    bads + (k === 2 ? ' triangles' : ' segments') + ' inside)';
+    bads + (k === 2 ? ' triangles' : k === 1 ? ' segments' : ' ' + simplexName) + ' inside)';
 
   // An empty result: say so where the mesh would be.
   let message = '';
@@ -522,6 +706,7 @@
 
   // --- Go ----------------------------------------------------------------------------------
   resize();
+  if (k >= 3) updateSlice();
   updatePositions();
   updateColours();
   updateVisibility();
@@ -533,10 +718,8 @@
       dirty = false;
       if (firstFrame) {
         firstFrame = false;
-        publish({ ready: true, n: data.n, k: k, vertices: V, dimensions: d,
-                  triangles: k === 2 ? main.geometry.index.count / 3 : 0,
-                  segments: k === 1 ? main.geometry.index.count / 2 : 0,
-                  uncertified: overlay.geometry.index.count / per, singular: markers.length,
+        publish({ ready: true, n: data.n, k: k, vertices: V, dimensions: d, simplices: simplices,
+                  ...drawn(), uncertified: bads, singular: markers.length,
                   uncertifiedCells: cellMarks.count,
                   names: names.slice(0, axes), components: components, colour: colourMode(),
                   triad: triadState(), rotation: R.map((row) => Array.from(row)),
