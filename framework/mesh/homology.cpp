@@ -62,6 +62,23 @@ struct Lattice {
   }
 };
 
+/// Sorts (key, record) pairs, records in ascending order, by their keys below 2^keyBits: a
+/// least-significant-digit radix sort, stable, so equal keys keep their records' order (the
+/// order of a comparison sort of the pairs, in a few passes over the data).
+void radixSort(std::vector<std::pair<std::uint64_t, std::uint32_t>>& items, int keyBits) {
+  constexpr int kDigitBits = 11;
+  constexpr std::size_t kDigits = std::size_t{1} << kDigitBits;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> scratch(items.size());
+  for (int shift = 0; shift < keyBits; shift += kDigitBits) {
+    // Count each digit, then place every item after the items of smaller digits.
+    std::vector<std::size_t> at(kDigits + 1, 0);
+    for (const auto& item : items) ++at[((item.first >> shift) & (kDigits - 1)) + 1];
+    std::partial_sum(at.begin(), at.end(), at.begin());
+    for (const auto& item : items) scratch[at[(item.first >> shift) & (kDigits - 1)]++] = item;
+    items.swap(scratch);
+  }
+}
+
 /// Numbers the tuples of `flat` (`width` vertex numbers each, each below 2^bits) by their
 /// distinct values in lexicographic order into id (one per tuple); returns the distinct tuples.
 std::vector<std::int32_t> numberTuples(const std::vector<std::int32_t>& flat, int width, int bits,
@@ -81,7 +98,7 @@ std::vector<std::int32_t> numberTuples(const std::vector<std::int32_t>& flat, in
           keyed[r] = {key, static_cast<std::uint32_t>(r)};
         },
         4096);
-    parallelSort(keyed.begin(), keyed.end(), std::less<>());
+    radixSort(keyed, width * bits);
     for (std::size_t r = 0; r < count; ++r) order[r] = keyed[r].second;
   } else {
     std::iota(order.begin(), order.end(), std::uint32_t{0});
