@@ -331,8 +331,9 @@
   // k = 3 it is a triangle (one vertex apart) or a quad (two and two), drawn as two triangles;
   // beyond, the piece's edges: where the hyperplane cuts a triangle of the simplex. A point of the
   // slice lies on a mesh edge (a, b) at the fraction f from a, so its position and its colour
-  // follow a and b (the projection is linear): sliceEnds holds a, b, f per point.
-  let sliceEnds = new Float64Array(0), slicePoints = 0, sliceCut = 0;
+  // follow a and b (the projection is linear): sliceEnds holds a, b, f per point, sliceBad
+  // whether its simplex is uncertified (drawn in magenta, as the simplices of k = 2).
+  let sliceEnds = new Float64Array(0), sliceBad = new Uint8Array(0), slicePoints = 0, sliceCut = 0;
   const sliceAxis = () => +$('sliceAxis').value;  // a coordinate of the page
   function sliceValue() {
     const c = sliceAxis();
@@ -340,11 +341,15 @@
     return lo[c] + (hi[c] - lo[c]) * +$('slice').value / 1000;
   }
 
-  /** The points of the slice u_c = t, three per triangle (k = 3) or two per segment. */
-  function cutSimplices(c, t) {
+  /** The points of the slice u_c = t, three per triangle (k = 3) or two per segment; `bad`
+   * gets the uncertified flag of each point's simplex. */
+  function cutSimplices(c, t, bad) {
     const out = [], value = new Float64Array(per);
     let s = 0;
-    const point = (m, l) => out.push(indices[s * per + m], indices[s * per + l], value[m] / (value[m] - value[l]));
+    const point = (m, l) => {
+      out.push(indices[s * per + m], indices[s * per + l], value[m] / (value[m] - value[l]));
+      bad.push(uncertified[s]);
+    };
     const above = (m) => value[m] > 0;
     sliceCut = 0;
     for (; s < simplices; ++s) {
@@ -390,7 +395,9 @@
   /** Cuts the simplices anew at the slider's hyperplane. */
   function updateSlice() {
     const c = sliceAxis(), t = sliceValue();
-    sliceEnds = Float64Array.from(cutSimplices(c, t));
+    const bad = [];
+    sliceEnds = Float64Array.from(cutSimplices(c, t, bad));
+    sliceBad = Uint8Array.from(bad);
     slicePoints = sliceEnds.length / 3;
     const g = new THREE.BufferGeometry();
     g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(slicePoints * 3), 3));
@@ -487,10 +494,10 @@
     const at = main.geometry.getAttribute('color');
     if (!at) return;
     const mode = $('colorBy').value, map = $('colormap').value, out = at.array;
-    const c = +mode, span = hi[c] > lo[c] ? hi[c] - lo[c] : 1;
+    const c = +mode, span = hi[c] > lo[c] ? hi[c] - lo[c] : 1, magenta = $('showUncertified').checked;
     for (let i = 0; i < slicePoints; ++i) {
       const v = sliceEnds[3 * i], w = sliceEnds[3 * i + 1], f = sliceEnds[3 * i + 2];
-      out.set(mode === 'component' ? CATEGORIES[component[v] % CATEGORIES.length] : mode === 'plain' ? PLAIN
+      out.set(magenta && sliceBad[i] ? [1, 0, 0.831] : mode === 'component' ? CATEGORIES[component[v] % CATEGORIES.length] : mode === 'plain' ? PLAIN
         : colourAt(map, ((1 - f) * raw[v * d + c] + f * raw[w * d + c] - lo[c]) / span), 3 * i);
     }
     linear(out);
@@ -502,9 +509,11 @@
     markers.forEach((m) => { m.visible = $('showSingular').checked; });
     overlay.visible = cellMarks.visible = $('showUncertified').checked;
     if (edges) edges.visible = $('showWire').checked;
-    if (skeleton) {
+    if (skeleton) {  // k >= 3: the uncertified simplices as edges in the skeleton, in the slice's colours
       main.visible = $('mode').value === 'slice';
       skeleton.visible = !main.visible;
+      overlay.visible = overlay.visible && skeleton.visible;
+      colourSlice();
       showCounts();
     }
     triadScene.visible = $('showTriad').checked;
