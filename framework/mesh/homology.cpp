@@ -197,69 +197,93 @@ struct Remainder {
 };
 
 /// Steps 2 and 3: removes one vertex per component, then reduction and coreduction pairs.
-Remainder shrink(const Lattice& l) {
-  const int k = l.k;
-  Remainder r;
-  r.alive.resize(std::size_t(k + 1));
-  // Alive facets and cofaces of each cell.
-  std::vector<std::vector<std::uint8_t>> facetsLeft(std::size_t(k + 1));
-  std::vector<std::vector<std::int32_t>> cofacesLeft(std::size_t(k + 1));
-  for (int d = 0; d <= k; ++d) {
-    r.alive[d].assign(std::size_t(l.count[d]), 1);
-    facetsLeft[d].assign(std::size_t(l.count[d]), std::uint8_t(d == 0 ? 0 : d + 1));
-    cofacesLeft[d].resize(std::size_t(l.count[d]));
-    for (std::int64_t c = 0; c < l.count[d]; ++c)
-      cofacesLeft[d][c] = static_cast<std::int32_t>(l.cofacesOf(d, c).size());
-  }
-  std::vector<std::uint64_t> queue;
-  const auto push = [&](int d, std::int64_t c) {
-    queue.push_back(std::uint64_t(d) << 32 | std::uint64_t(c));
-  };
-  // Step 2: one vertex per component (the smallest), a class of H_0 of its own.
-  DisjointSets sets(std::size_t(l.count[0]));
-  for (std::int64_t e = 0; k >= 1 && e < l.count[1]; ++e)
-    sets.unite(l.facets[1][2 * e], l.facets[1][2 * e + 1]);
-  for (std::int64_t v = 0; v < l.count[0]; ++v) {
-    if (sets.find(std::int32_t(v)) != v) continue;
-    r.alive[0][v] = 0;
-    ++r.components;
-    for (std::int32_t e : l.cofacesOf(0, v))
-      if (--facetsLeft[1][e] == 1) push(1, e);
-  }
-  // Free faces from the start (the boundary of a complex with boundary).
-  for (int d = 0; d < k; ++d)
-    for (std::int64_t c = 0; c < l.count[d]; ++c)
-      if (cofacesLeft[d][c] == 1) push(d, c);
-  // Step 3, first in first out: a coreduction grows from the removed vertices as a tree.
-  for (std::size_t head = 0; head < queue.size(); ++head) {
-    const int d = int(queue[head] >> 32);
-    const auto x = static_cast<std::int64_t>(queue[head] & 0xffffffffULL);
-    if (!r.alive[d][x]) continue;
-    if (d >= 1 && facetsLeft[d][x] == 1) {
-      // Coreduction (a, x): a is x's only facet left; a has no facet left (dd = 0 on S).
-      std::int32_t a = -1;
-      for (std::int32_t f : l.facetsOf(d, x))
-        if (r.alive[d - 1][f]) a = f;
-      assert(d == 1 || facetsLeft[d - 1][a] == 0);
-      r.alive[d][x] = r.alive[d - 1][a] = 0;
-      for (std::int32_t y : l.cofacesOf(d, x))
-        if (r.alive[d + 1][y] && --facetsLeft[d + 1][y] == 1) push(d + 1, y);
-      for (std::int32_t y : l.cofacesOf(d - 1, a))
-        if (r.alive[d][y] && --facetsLeft[d][y] == 1) push(d, y);
-    } else if (d < k && cofacesLeft[d][x] == 1) {
-      // Reduction (x, b): b is x's only coface left; b has no coface left (dd = 0 on S).
-      std::int32_t b = -1;
-      for (std::int32_t y : l.cofacesOf(d, x))
-        if (r.alive[d + 1][y]) b = y;
-      r.alive[d][x] = r.alive[d + 1][b] = 0;
-      for (std::int32_t f : l.facetsOf(d + 1, b))
-        if (r.alive[d][f] && --cofacesLeft[d][f] == 1) push(d, f);
-      for (std::int32_t f : d >= 1 ? l.facetsOf(d, x) : std::span<const std::int32_t>())
-        if (r.alive[d - 1][f] && --cofacesLeft[d - 1][f] == 1) push(d - 1, f);
+class Shrink {
+ public:
+  explicit Shrink(const Lattice& l) : l_(l), k_(l.k) {
+    // Every cell alive, with all its facets and cofaces.
+    r_.alive.resize(std::size_t(k_ + 1));
+    facetsLeft_.resize(std::size_t(k_ + 1));
+    cofacesLeft_.resize(std::size_t(k_ + 1));
+    for (int d = 0; d <= k_; ++d) {
+      r_.alive[d].assign(std::size_t(l.count[d]), 1);
+      facetsLeft_[d].assign(std::size_t(l.count[d]), std::uint8_t(d == 0 ? 0 : d + 1));
+      cofacesLeft_[d].resize(std::size_t(l.count[d]));
+      for (std::int64_t c = 0; c < l.count[d]; ++c)
+        cofacesLeft_[d][c] = static_cast<std::int32_t>(l.cofacesOf(d, c).size());
     }
   }
-  return r;
-}
+
+  Remainder run() {
+    removeComponents();
+    // Free faces from the start (the boundary of a complex with boundary).
+    for (int d = 0; d < k_; ++d)
+      for (std::int64_t c = 0; c < l_.count[d]; ++c)
+        if (cofacesLeft_[d][c] == 1) push(d, c);
+    // Step 3, first in first out: a coreduction grows from the removed vertices as a tree.
+    for (std::size_t head = 0; head < queue_.size(); ++head) {
+      const int d = int(queue_[head] >> 32);
+      const auto x = static_cast<std::int64_t>(queue_[head] & 0xffffffffULL);
+      if (!r_.alive[d][x]) continue;
+      if (d >= 1 && facetsLeft_[d][x] == 1)
+        coreduce(d, x);
+      else if (d < k_ && cofacesLeft_[d][x] == 1)
+        reduce(d, x);
+    }
+    return std::move(r_);
+  }
+
+ private:
+  void push(int d, std::int64_t c) { queue_.push_back(std::uint64_t(d) << 32 | std::uint64_t(c)); }
+
+  /// Step 2: one vertex per component (the smallest), a class of H_0 of its own.
+  void removeComponents() {
+    DisjointSets sets(std::size_t(l_.count[0]));
+    for (std::int64_t e = 0; k_ >= 1 && e < l_.count[1]; ++e)
+      sets.unite(l_.facets[1][2 * e], l_.facets[1][2 * e + 1]);
+    for (std::int64_t v = 0; v < l_.count[0]; ++v) {
+      if (sets.find(std::int32_t(v)) != v) continue;
+      r_.alive[0][v] = 0;
+      ++r_.components;
+      for (std::int32_t e : l_.cofacesOf(0, v))
+        if (--facetsLeft_[1][e] == 1) push(1, e);
+    }
+  }
+
+  /// Coreduction (a, x): a is x's only facet left; a has no facet left (dd = 0 on S), so only
+  /// the cofaces of both lose a facet.
+  void coreduce(int d, std::int64_t x) {
+    std::int32_t a = -1;
+    for (std::int32_t f : l_.facetsOf(d, x))
+      if (r_.alive[d - 1][f]) a = f;
+    assert(d == 1 || facetsLeft_[d - 1][a] == 0);
+    r_.alive[d][x] = r_.alive[d - 1][a] = 0;
+    for (std::int32_t y : l_.cofacesOf(d, x))
+      if (r_.alive[d + 1][y] && --facetsLeft_[d + 1][y] == 1) push(d + 1, y);
+    for (std::int32_t y : l_.cofacesOf(d - 1, a))
+      if (r_.alive[d][y] && --facetsLeft_[d][y] == 1) push(d, y);
+  }
+
+  /// Reduction (x, b): b is x's only coface left; b has no coface left (dd = 0 on S), so only
+  /// the facets of both lose a coface.
+  void reduce(int d, std::int64_t x) {
+    std::int32_t b = -1;
+    for (std::int32_t y : l_.cofacesOf(d, x))
+      if (r_.alive[d + 1][y]) b = y;
+    r_.alive[d][x] = r_.alive[d + 1][b] = 0;
+    for (std::int32_t f : l_.facetsOf(d + 1, b))
+      if (r_.alive[d][f] && --cofacesLeft_[d][f] == 1) push(d, f);
+    if (d == 0) return;
+    for (std::int32_t f : l_.facetsOf(d, x))
+      if (r_.alive[d - 1][f] && --cofacesLeft_[d - 1][f] == 1) push(d - 1, f);
+  }
+
+  const Lattice& l_;
+  const int k_;
+  Remainder r_;
+  std::vector<std::vector<std::uint8_t>> facetsLeft_;   ///< alive facets per cell
+  std::vector<std::vector<std::int32_t>> cofacesLeft_;  ///< alive cofaces per cell
+  std::vector<std::uint64_t> queue_;                    ///< (dimension, cell) to look at
+};
 
 /// Arithmetic modulo the prime P (2, or kHomologyPrime).
 template <std::uint32_t P>
@@ -370,7 +394,7 @@ Homology homology(std::size_t vertexCount, int k, std::span<const std::int32_t> 
     if (on == 1) ++h.boundaryFacets;
     if (on >= 3) ++h.nonmanifoldFacets;
   }
-  const Remainder r = shrink(l);
+  const Remainder r = Shrink(l).run();
   h.bettiZ2 = bettiOf(l, r, ranks<2>(l, r));
   h.betti = bettiOf(l, r, ranks<kHomologyPrime>(l, r));
   // Euler-Poincare: the alternating sums of the Betti numbers and of the face counts agree.
