@@ -31,7 +31,7 @@ struct Builder {
 
 /// Every artefact the report knows, in report order: the one place that maps ids to builders.
 /// Ids without a builder get genericTable.
-constexpr std::array<Builder, 9> kBuilders = {{
+constexpr std::array<Builder, 10> kBuilders = {{
     {"tab1-degeneracy", false,
      [](const BuildInput& in) {
        return tab1Degeneracy(in.id, in.csv, loadPaperTable1(in.reference));
@@ -40,6 +40,9 @@ constexpr std::array<Builder, 9> kBuilders = {{
      [](const BuildInput& in) {
        return figDegeneracyVsN(in.id, in.csv, loadPaperTable1(in.reference));
      }},
+    // k = 3: one series per depth, and no paper points (its Table 1 has surfaces only).
+    {"fig-degeneracy-vs-n-k3", false,
+     [](const BuildInput& in) { return figDegeneracyVsN(in.id, in.csv, {}, true); }},
     {"tab-ablation-bounding", false,
      [](const BuildInput& in) { return tabAblation(in.id, in.csv, "bounding"); }},
     {"tab-ablation-subdivision", false,

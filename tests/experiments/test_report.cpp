@@ -492,6 +492,32 @@ TEST_CASE("Figures: a gnuplot script with inline data, rendered when gnuplot exi
   CHECK_FALSE(fs::exists(results / "fig-degeneracy-vs-n" / "fig-degeneracy-vs-n.tmp.png"));
 }
 
+TEST_CASE("fig-degeneracy-vs-n-k3: one series per depth and no paper points", "[report]") {
+  std::vector<std::map<std::string, std::string>> rows;
+  for (int n : {4, 5, 6})
+    for (int depth : {3, 4})
+      for (int jitter : {1, 2}) {
+        const std::string name = "sphere3-r" + std::to_string(n);
+        rows.push_back({{"run", name + ".L" + std::to_string(depth) + ".j" + std::to_string(jitter)},
+                        {"problem", name},
+                        {"n", std::to_string(n)},
+                        {"k", "3"},
+                        {"depth", std::to_string(depth)},
+                        {"cells.normal", "100"},
+                        {"cells.abnormal", std::to_string(10 * n + depth + jitter)}});
+      }
+  const CsvTable csv = parseCsv(experimentCsv("fig-degeneracy-vs-n-k3", rows), "k3.csv");
+  const Artefact a = buildArtefact("fig-degeneracy-vs-n-k3", csv, scratch());
+  CHECK(a.figure);
+  CHECK_THAT(a.gnuplot, Catch::Contains("k = 3, depth=3: mean"));
+  CHECK_THAT(a.gnuplot, Catch::Contains("k = 3, depth=4: mean"));
+  CHECK_THAT(a.gnuplot, !Catch::Contains("$paper"));
+  REQUIRE(a.sentences.size() == 4);  // per depth: the trend and the paper's observation
+  CHECK_THAT(a.sentences[0], Catch::StartsWith("For k = 3, depth=3 the abnormal share rises"));
+  REQUIRE(a.tables.size() == 1);
+  CHECK(a.tables[0].rows.size() == 6);  // 2 depths x 3 n
+}
+
 TEST_CASE("Table 1's main columns are the paper's settings; the others are extra columns",
           "[report]") {
   // One problem under four settings: only bernstein + paper may fill the main columns.

@@ -18,9 +18,11 @@ namespace ndc::report::detail {
 Artefact tab1Degeneracy(const std::string& id, const CsvTable& t,
                         const std::vector<PaperRow>& paper);
 
-/// `fig-degeneracy-vs-n` (fig_degeneracy_vs_n.cpp): the abnormal share against n.
+/// `fig-degeneracy-vs-n` and `fig-degeneracy-vs-n-k3` (fig_degeneracy_vs_n.cpp): the abnormal
+/// share against n, one series per k (and per depth with `depthSeries`); the paper's Table 1
+/// points beside them unless `paper` is empty.
 Artefact figDegeneracyVsN(const std::string& id, const CsvTable& t,
-                          const std::vector<PaperRow>& paper);
+                          const std::vector<PaperRow>& paper, bool depthSeries = false);
 
 /// `tab-ablation-*` (tab_ablation.cpp): the variants of one strategy family (`bounding`,
 /// `subdivision`) or of the scalar type (`scalar`) compared.

@@ -1,5 +1,5 @@
-// fig-degeneracy-vs-n: the abnormal share against the ambient dimension n
-// (docs/experiment-fig-degeneracy-vs-n.md).
+// fig-degeneracy-vs-n and fig-degeneracy-vs-n-k3: the abnormal share against the ambient
+// dimension n (docs/experiment-fig-degeneracy-vs-n.md, docs/experiment-fig-degeneracy-vs-n-k3.md).
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -156,15 +156,19 @@ void degeneracyPaper(const std::vector<PaperRow>& paper, DegeneracyPlot& plot,
 }  // namespace
 
 Artefact figDegeneracyVsN(const std::string& id, const CsvTable& t,
-                          const std::vector<PaperRow>& paper) {
+                          const std::vector<PaperRow>& paper, bool depthSeries) {
   requireRunColumns(t);
   requireColumns(t, {"n", "k", "depth", "cells.normal"_column, "cells.abnormal"_column});
   Artefact a;
   a.id = id;
   a.figure = true;
-  a.title = "Abnormal share against the ambient dimension n";
-  // One series per k and varying setting.
-  const std::vector<std::string> vary = without(varyingColumns(t, kSettingColumns), {"depth"});
+  a.title = depthSeries ? "Abnormal share against the ambient dimension n, per depth"
+                        : "Abnormal share against the ambient dimension n";
+  // One series per k and varying setting (the depth only with depthSeries: otherwise runs at
+  // several depths are pooled, like seeds).
+  const std::vector<std::string> vary =
+      depthSeries ? varyingColumns(t, kSettingColumns)
+                  : without(varyingColumns(t, kSettingColumns), {"depth"});
   std::vector<std::string> seriesKeys = {"k"};
   seriesKeys.insert(seriesKeys.end(), vary.begin(), vary.end());
 
@@ -191,7 +195,7 @@ Artefact figDegeneracyVsN(const std::string& id, const CsvTable& t,
   for (std::size_t s = 0; s < series.size(); ++s)
     degeneracySeries(t, series[s], s, vary, plot, a.sentences);
   if (!plot.plots.empty()) {
-    degeneracyPaper(paper, plot, a.sentences);
+    if (!paper.empty()) degeneracyPaper(paper, plot, a.sentences);
     plot.gp.command("set xrange [" + formatFixed(plot.nMin - 0.5, 1) + ":" +
                     formatFixed(plot.nMax + 0.5, 1) + "]");
     plot.gp.command("plot " + join(plot.plots, ", \\\n       "));
