@@ -12,6 +12,7 @@
 #include "framework/problem/budget.hpp"
 #include "strategies/connection/crossing.hpp"
 #include "strategies/connection/crossing/dual_complex.hpp"
+#include "strategies/connection/crossing/higher_crossing.hpp"
 
 namespace ndc::crossing_detail {
 
@@ -212,10 +213,8 @@ namespace ndc {
 
 template <class S>
 ConnectionOutput<S> CrossingConnection::connect(const ConnectionInput<S>& in) const {
-  if (in.k != 1 && in.k != 2) {
-    throw InputError("connection 'crossing' supports k = 1 and k = 2, not k = " +
-                     std::to_string(in.k));
-  }
+  // k >= 3: the uniform grid's dual cubes split by Kuhn's rule (docs/crossing.md, "Any k").
+  if (in.k >= 3) return crossing_detail::higherCrossing(in, maxFaceDepth);
   return crossing_detail::AdaptiveCrossing<S>(in, maxFaceDepth).run();
 }
 

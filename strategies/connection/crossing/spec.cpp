@@ -11,7 +11,7 @@ ModelSpec CrossingConnection::spec() {
           "2^n-tree (docs/crossing.md, docs/certificate.md).",
           {{"max_face_depth", ParameterType::kInteger, static_cast<double>(defaults.maxFaceDepth),
             1, 40, "halvings per free axis of a face whose crossing is not proven unique"}},
-          {.certifies = true, .refines = true, .minK = 1, .maxK = 2}};
+          {.certifies = true, .refines = true, .minK = 1, .maxK = 64}};
 }
 
 CrossingConnection CrossingConnection::create(const Parameters& parameters) {
