@@ -597,6 +597,13 @@ Complex<S> weldAtSingularPoints(Complex<S>& complex, const std::vector<SingularP
   double diameter = 0;
   for (int j = 0; j < grid.n; ++j) diameter = std::max(diameter, grid.domain.width(j));
   joinAtSingularPoints<S>(complex, points, grid);
+  // For k >= 3 the crossing connection makes each vertex once, one per piece of M in a cell:
+  // two cells' vertices may still land on one point of M (a grid vertex on a symmetric M), and
+  // welding them would pinch the complex (docs/crossing.md, "Any k").
+  if (complex.k >= 3 && points.empty()) {
+    dropUnusedVertices(complex);
+    return complex;
+  }
   Complex<S> welded = weld<S>(complex, 1e-9 * diameter);
   dropUnusedVertices(welded);
   return welded;

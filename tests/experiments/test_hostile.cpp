@@ -133,12 +133,17 @@ TEST_CASE("hostile: numeric edges are results or refusals naming the file", "[cl
   refused("info", problem("wide", "x^2 + y^2 - 1", "[[-1e308, 1e308], [-2, 2]]"), "overflows");
   refused("solve --depth 8", problem("narrow", "x + y - 2", "[[1, 1.000000000000001], [0.5, 1.5]]"),
           "too deep for the domain");
-  // k = 3 with the default connection: refused before any work, naming the file.
-  const fs::path k3 = scratch() / "k3.toml";
-  std::ofstream(k3) << "name = \"k3\"\nvariables = [\"x\", \"y\", \"z\", \"w\"]\n"
-                       "domain = [[-1, 1], [-1, 1], [-1, 1], [-1, 1]]\n"
-                       "equations = [\"x^2 + y^2 + z^2 + w^2 - 0.5\"]\n";
-  refused("solve --depth 3", k3, "k = 3");
+  // k = 0 (as many equations as variables) and k = n (none): refused before any work, naming
+  // the file. (k = 3 in R^4 is solved: tests/strategies/test_higher_crossing.cpp.)
+  const fs::path k0 = scratch() / "k0.toml";
+  std::ofstream(k0)
+      << "name = \"k0\"\nvariables = [\"x\", \"y\"]\n"
+         "domain = [[-1, 1], [-1, 1]]\nequations = [\"x^2 + y^2 - 0.5\", \"x - y\"]\n";
+  refused("solve --depth 3", k0, "between 1 and n-1");
+  const fs::path kn = scratch() / "kn.toml";
+  std::ofstream(kn) << "name = \"kn\"\nvariables = [\"x\", \"y\"]\n"
+                       "domain = [[-1, 1], [-1, 1]]\nequations = []\n";
+  refused("solve --depth 3", kn, "between 1 and n-1");
   // An equation that vanishes everywhere (x - x): its zero set is the domain, refused before
   // any work, not 2^24 cells and an empty mesh.
   refused("solve --depth 12", problem("everywhere", "x - x + 0*y"), "vanishes everywhere");
