@@ -464,6 +464,7 @@ void checkCertificate(Summary& summary) {
   const MeshStats& m = summary.mesh;
   std::string flaw;
   if (m.nonmanifoldEdges > 0) flaw = "non-manifold edges";
+  if (m.nonmanifoldFacets > 0) flaw = "non-manifold facets";
   if (summary.k == 1 && m.branchVertices > 0) flaw = "branch vertices";
   if (!summary.singularPoints.empty()) flaw = "singular points";
   if (flaw.empty()) return;

@@ -49,6 +49,17 @@ std::uint64_t defaultMemoryBudget() {
   return static_cast<std::uint64_t>(kDefaultMemoryShare * total);
 }
 
+namespace {
+
+/// C(n, k): the choices of k fixed axes of a minimal m-face.
+double faceChoices(int n, int k) {
+  double choices = 1;
+  for (int i = 0; i < k; ++i) choices = choices * (n - i) / (i + 1);
+  return choices;
+}
+
+}  // namespace
+
 double workPerCell(const Problem& problem) {
   double work = 0;
   for (const Expression& e : problem.equations) {
@@ -62,6 +73,11 @@ double workPerCell(const Problem& problem) {
     const double n = static_cast<double>(problem.n());
     work += densityFree(e) ? std::min(coefficients * span, 8 * n * n) : coefficients * span;
   }
+  // k >= 3: the crossing connection solves the C(n, k) minimal m-faces a cell owns, each a
+  // square system (measured about 4,000 units per face choice: 3-spheres in R^4, S^1 x S^2 in
+  // R^5, the flat 3-torus in R^6, docs/crossing.md "Any k").
+  const int k = problem.k();
+  if (k >= 3) work += 4000 * faceChoices(problem.n(), k);
   return work;
 }
 
@@ -70,6 +86,10 @@ double bytesPerSolutionCell(int n, int k, const std::string& scalar, unsigned pr
   // where the cells dominate): 330-600 bytes in double for n <= 6, growing with n; the model
   // stays above every measurement. k enters through the simplices per cell.
   double bytes = 256.0 + 96.0 * n + 64.0 * k;
+  // k >= 3: the crossing connection keeps each of the cell's C(n, k) minimal m-faces (its key,
+  // corner, solution) and the k! simplices of the crossed ones (measured 4-15 KB per cell for
+  // C(n, k) = 4..20).
+  if (k >= 3) bytes += 750.0 * faceChoices(n, k);
   // An MPFR number is a 32-byte header and its limbs, plus allocator overhead: measured 2.1x
   // double at 128 bits.
   if (scalar == "mpfr") bytes *= 1.5 + precisionBits / 128.0;

@@ -386,7 +386,9 @@ class HigherCrossing {
       if (counts[std::size_t(CellFailure::kUndecided)] > 0)
         why << "; for k >= 4 a cell's crossings are only shown to form a homology sphere, "
                "which does not prove a ball";
-      why << "; k >= 3 has no adaptive refinement: a larger --depth may certify";
+      why << "; k >= 3 has no adaptive refinement or blocks yet: a larger --depth may certify, "
+             "but not where M folds over grid faces at every depth, as a round 3-sphere does "
+             "(docs/certificate.md, \"Any k\")";
     }
     if (degenerate > 0) {
       why << (t.uncertifiedCells > 0 ? "; " : "") << degenerate
