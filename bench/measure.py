@@ -8,14 +8,23 @@ bench/cgal_torus and bench/gudhi_trace: coordinates u0..u{n-1}, or x y z when th
 faces or edges), and prints one JSON line with
 
 * the topology: vertices, simplices, components, Euler characteristic, boundary and
-  non-manifold edges (surfaces) or vertices of degree other than 2 (curves);
+  non-manifold edges (surfaces), vertices of degree other than 2 (curves), or boundary and
+  non-manifold triangles and the Betti numbers over Z/2 and over Q (3-manifolds, k = 3: a
+  tetrahedron `face` of 4 vertices; the Betti numbers of a closed one, every triangle in two
+  tetrahedra, by collapsing it to a small complex whose boundary ranks are then computed);
 * for the problems whose distance function is known in closed form (torus,
   clifford-torus-rotated, sphere-r5, flat-torus-r6, circle-r8): the two-sided Hausdorff distance
   between the mesh and the true manifold M. Mesh -> M: the exact distance to M of the vertices and
   of a barycentric grid on every simplex (4 steps per triangle edge, 8 per segment). M -> mesh:
   the exact point-to-triangle (point-to-segment) distance to the mesh of a dense sample of M
   (spacing about 0.02: it finds missing or misplaced pieces of the mesh; the chord error between
-  the samples is what the mesh -> M side measures);
+  the samples is what the mesh -> M side measures). For the 3-manifolds (sphere3-r5, sphere3-r6,
+  s1xs2-r5, flat-3torus-r6, o3-r9) mesh -> M uses the vertices and a barycentric grid of 3 steps
+  per tetrahedron edge, and M -> mesh a sample of M of spacing about 0.08 (pseudo-random with a
+  fixed seed, or a grid) with the exact distance to the tetrahedra around the 32 mesh vertices
+  nearest to each sample point (an upper bound of the distance to the mesh, exact unless the
+  nearest tetrahedron has none of those vertices; on the 3-sphere meshes 16 already give the
+  value of 48);
 * for genus2 (no closed-form distance): the maximum of |F| / |grad F| (the first-order distance)
   over the same points of the mesh.
 
@@ -125,12 +134,17 @@ def read_ply(path):
     return out
 
 
-def read_mesh(path, n):
-    """Vertices (V x n) and simplices (S x 2 segments, or S x 3 triangles; polygons fanned)."""
+def read_mesh(path, n, k=2):
+    """Vertices (V x n) and simplices (S x 2 segments, S x 3 triangles with polygons fanned, or
+    for k = 3 S x 4 tetrahedra, the `face` lists of 4 vertices)."""
     ply = read_ply(path)
     vert = ply["vertex"]
     names = [f"u{j}" for j in range(n)] if "u0" in vert else ["x", "y", "z"][:n]
     points = np.column_stack([np.asarray(vert[c], dtype=float) for c in names])
+    if k == 3:
+        face = ply.get("face", {})
+        lists = face.get("vertex_indices", face.get("vertex_index", []))
+        return points, np.array(lists, dtype=np.int64).reshape(-1, 4)
     if "face" in ply and len(next(iter(ply["face"].values()), [])) > 0:
         face = ply["face"]
         lists = face.get("vertex_indices", face.get("vertex_index"))
@@ -211,6 +225,92 @@ def _sphere_section(m, d):
     return dist, samples
 
 
+def _ball_section(c, radius, m, d, seed):
+    """The sphere |x - c| = radius cut by the flat M x + d = 0 (k = 3): a round 3-sphere of
+    radius rho about the foot c0 of c on the flat; samples pseudo-random (seed) on it."""
+    c, m, d = np.asarray(c, float), np.atleast_2d(np.asarray(m, float)), np.asarray(d, float)
+    gram = m @ m.T
+    c0 = c - m.T @ np.linalg.solve(gram, m @ c + d)
+    rho = math.sqrt(radius * radius - (c - c0) @ (c - c0))
+    _, _, vt = np.linalg.svd(m)
+    basis = vt[m.shape[0]:]
+
+    def dist(x):
+        y = x - c0
+        inplane = y @ basis.T
+        h2 = (y ** 2).sum(axis=1) - (inplane ** 2).sum(axis=1)
+        return np.sqrt(np.maximum(h2, 0) + (np.linalg.norm(inplane, axis=1) - rho) ** 2)
+
+    def samples(spacing):
+        count = int(math.ceil(2 * math.pi ** 2 * rho ** 3 / spacing ** 3))
+        u = np.random.default_rng(seed).standard_normal((count, basis.shape[0]))
+        u /= np.linalg.norm(u, axis=1)[:, None]
+        return c0 + rho * u @ basis
+
+    return dist, samples
+
+
+def _sphere_product(blocks, c, radii):
+    """Round spheres |x_I - c_I| = r_I in consecutive blocks I of coordinates (their product):
+    the distance is the root of the sum of the blocks' squared distances; samples a grid of
+    circles' angles and Fibonacci points on 2-spheres."""
+    c = np.asarray(c, float)
+    starts = np.cumsum([0] + list(blocks))
+
+    def dist(x):
+        d2 = 0
+        for b, r in enumerate(radii):
+            y = x[:, starts[b]:starts[b + 1]] - c[starts[b]:starts[b + 1]]
+            d2 = d2 + (np.linalg.norm(y, axis=1) - r) ** 2
+        return np.sqrt(d2)
+
+    def factor(size, r, spacing):
+        if size == 2:
+            t = np.linspace(0, 2 * math.pi, int(math.ceil(2 * math.pi * r / spacing)),
+                            endpoint=False)
+            return r * np.column_stack([np.cos(t), np.sin(t)])
+        count = int(math.ceil(4 * math.pi * r * r / spacing ** 2))
+        i = np.arange(count) + 0.5
+        z = 1 - 2 * i / count
+        phi = math.pi * (1 + 5 ** 0.5) * i
+        w = np.sqrt(1 - z * z)
+        return r * np.column_stack([w * np.cos(phi), w * np.sin(phi), z])
+
+    def samples(spacing):
+        out = np.zeros((1, 0))
+        for size, r in zip(blocks, radii):
+            f = factor(size, r, spacing)
+            out = np.column_stack([np.repeat(out, len(f), axis=0), np.tile(f, (len(out), 1))])
+        return out + c
+
+    return dist, samples
+
+
+def _orthogonal_group():
+    """O(3) in R^9 (row by row): the distance of X is |Sigma - I| over its singular values
+    (the nearest orthogonal matrix is U V^T); samples: rotations from pseudo-random unit
+    quaternions and their negatives (the det -1 component)."""
+    def dist(x):
+        sv = np.linalg.svd(x.reshape(-1, 3, 3), compute_uv=False)
+        return np.sqrt(((sv - 1) ** 2).sum(axis=1))
+
+    def samples(spacing):
+        # Each component is RP^3, a 3-sphere of radius 2 sqrt(2) mod +-1 in R^9: volume 16 sqrt(2) pi^2.
+        count = int(math.ceil(16 * math.sqrt(2) * math.pi ** 2 / spacing ** 3))
+        q = np.random.default_rng(9).standard_normal((count, 4))
+        q /= np.linalg.norm(q, axis=1)[:, None]
+        w, x, y, z = q.T
+        r = np.column_stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
+                             2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
+                             2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)])
+        return np.concatenate([r, -r])
+
+    return dist, samples
+
+
+_C6 = [0.0317, -0.0211, 0.0143, -0.0378, 0.0259, -0.0096]
+
+
 def _torus():
     def dist(x):
         return np.abs(np.hypot(np.hypot(x[:, 0], x[:, 1]) - 1, x[:, 2]) - 0.4)
@@ -248,12 +348,216 @@ PROBLEMS = {
          [1, -.5, 0, 1, .25, -1, .5, 0], [0, 0, 1, 0, .5, 1, -1, 1],
          [.25, 1, 0, .5, 0, 0, 1, -1]], [.1, -.05, .15, -.1, .05, -.1])),
     "genus2": (3, 2, None),
+    # k = 3: the problem files experiments/problems/sphere3-r5.toml .. o3-r9.toml.
+    "sphere3-r5": (5, 3, _ball_section(
+        _C6[:5], 0.93, [[-0.010174, 0.587131, -0.532017, 0.540751, 0.282348]], [0.0334464], 5)),
+    "sphere3-r6": (6, 3, _ball_section(
+        _C6, 0.93, [[0.824223, -0.437238, -0.310599, 0.114575, -0.0962254, -0.103056],
+                    [0.187423, 0.62032, -0.347973, 0.532667, 0.112204, 0.40332]],
+        [-0.0250782, 0.0332241], 6)),
+    "s1xs2-r5": (5, 3, _sphere_product([2, 3], [0.0213, -0.0147, -0.0181, 0.0262, 0.0119],
+                                       [0.83, 0.61])),
+    "flat-3torus-r6": (6, 3, _sphere_product(
+        [2, 2, 2], [0.0213, -0.0147, -0.0181, 0.0262, 0.0119, -0.0231], [0.71, 0.67, 0.63])),
+    "o3-r9": (9, 3, _orthogonal_group()),
 }
 
 # --- Topology ----------------------------------------------------------------------------------
 
 
+def _faces(simplices):
+    """The distinct facets of the simplices (sorted rows) and, per simplex, its facets' rows."""
+    k = simplices.shape[1]
+    facets = np.sort(np.concatenate([np.delete(simplices, i, axis=1) for i in range(k)]), axis=1)
+    unique, inverse = np.unique(facets, axis=0, return_inverse=True)
+    return unique, inverse.reshape(-1).reshape(k, -1).T
+
+
+def betti3(nv, tets, limit=1000000):
+    """Betti numbers over Z/2 and over Q of a closed 3-dimensional pseudomanifold (every
+    triangle in exactly two tetrahedra), or None for any other mesh or one whose reduced complex
+    keeps more than `limit` cells.
+
+    One vertex per component and one tetrahedron per strongly connected component (tetrahedra
+    joined through triangles) are removed; then coreductions (a cell with one live face goes with
+    it) and collapses (a cell with one live coface goes with it) run until none is left. Both
+    only delete entries of the boundary matrices, so the live cells' restricted boundaries are a
+    complex with the same homology, whose ranks are then computed. The removed vertex lowers b0
+    by one; the removed tetrahedron lowers b3 by one over Z/2 (the sum of all the component's
+    tetrahedra is a cycle) and over Q where the component is orientable, and raises b2 by one
+    over Q where it is not."""
+    tets = np.sort(tets, axis=1)  # facet i (without vertex i) then has the sign (-1)^i
+    triangles, tet_tris = _faces(tets)
+    counts = np.bincount(tet_tris.ravel(), minlength=len(triangles))
+    if len(tets) == 0 or (counts != 2).any():
+        return None
+    edges, tri_edges = _faces(triangles)
+    # Strongly connected components and their orientability: the two tetrahedra of a triangle
+    # are consistently oriented when its signs in their boundaries are opposite.
+    pair = np.argsort(tet_tris.ravel(), kind="stable").reshape(-1, 2).tolist()
+    neighbours = [[] for _ in range(len(tets))]
+    for a, b in pair:
+        neighbours[a // 4].append((b // 4, a % 4, b % 4))
+        neighbours[b // 4].append((a // 4, b % 4, a % 4))
+    orient = [0] * len(tets)
+    starts, orientable = [], 0
+    for start in range(len(tets)):
+        if orient[start]:
+            continue
+        starts.append(start)
+        ok = True
+        orient[start] = 1
+        stack = [start]
+        while stack:
+            t = stack.pop()
+            for u, i, j in neighbours[t]:
+                want = -orient[t] * (-1) ** (i + j)
+                if not orient[u]:
+                    orient[u] = want
+                    stack.append(u)
+                elif orient[u] != want:
+                    ok = False
+        orientable += ok
+    # The complex: faces[d][c] lists the faces of cell c of dimension d (d = 1, 2, 3), in the
+    # order of their signs (-1)^i; cofaces[d][c] the cofaces of cell c of dimension d.
+    faces = [None, edges.tolist(), tri_edges.tolist(), tet_tris.tolist()]
+    sizes = [nv, len(edges), len(triangles), len(tets)]
+    cofaces = [[[] for _ in range(sizes[d])] for d in range(3)] + [None]
+    for d in (1, 2, 3):
+        for c, fs in enumerate(faces[d]):
+            for f in fs:
+                cofaces[d - 1][f].append(c)
+    alive = [np.ones(sizes[d], bool) for d in range(4)]
+    alive[0][:] = False
+    alive[0][np.unique(tets)] = True
+    live_faces = [None] + [[len(fs) for fs in faces[d]] for d in (1, 2, 3)]
+    live_cofaces = [[len(cs) for cs in cofaces[d]] for d in range(3)] + [None]
+    queue = []
+
+    def kill(d, c):
+        alive[d][c] = False
+        if d > 0:
+            for f in faces[d][c]:
+                if alive[d - 1][f]:
+                    live_cofaces[d - 1][f] -= 1
+                    queue.append((d - 1, f))
+        if d < 3:
+            for g in cofaces[d][c]:
+                if alive[d + 1][g]:
+                    live_faces[d + 1][g] -= 1
+                    queue.append((d + 1, g))
+
+    seen = np.zeros(nv, bool)
+    components = 0
+    for v0 in np.nonzero(alive[0])[0].tolist():
+        if seen[v0]:
+            continue
+        components += 1
+        seen[v0] = True
+        stack = [v0]
+        while stack:
+            u = stack.pop()
+            for e in cofaces[0][u]:
+                for w in faces[1][e]:
+                    if not seen[w]:
+                        seen[w] = True
+                        stack.append(w)
+        kill(0, v0)
+    for t in starts:
+        kill(3, t)
+    # First the tetrahedra, each through the triangle it was reached by (a depth-first spanning
+    # tree of the dual graph), then coreductions and collapses in any dimension.
+    while queue:
+        d, c = queue.pop()
+        if d == 2 and alive[2][c] and live_cofaces[2][c] == 1:
+            g = next(x for x in cofaces[2][c] if alive[3][x])
+            kill(2, c)
+            kill(3, g)
+    queue += [(d, c) for d in range(4) for c in np.nonzero(alive[d])[0].tolist()]
+    while queue:
+        d, c = queue.pop()
+        if not alive[d][c]:
+            continue
+        if d > 0 and live_faces[d][c] == 1:  # coreduction
+            f = next(x for x in faces[d][c] if alive[d - 1][x])
+            kill(d, c)
+            kill(d - 1, f)
+        elif d < 3 and live_cofaces[d][c] == 1:  # collapse
+            g = next(x for x in cofaces[d][c] if alive[d + 1][x])
+            kill(d, c)
+            kill(d + 1, g)
+    left = [int(a.sum()) for a in alive]
+    if sum(left) > limit:
+        return None
+    out = {}
+    for field, modulus in (("betti_z2", 2), ("betti", 2147483647)):
+        b = _reduce(faces, alive, modulus)
+        b[0] += components
+        if modulus == 2:
+            b[3] += len(starts)
+        else:
+            b[3] += orientable
+            b[2] -= len(starts) - orientable  # a non-orientable component's removed tetrahedron
+        out[field] = b
+    return out
+
+
+def _reduce(faces, alive, modulus):
+    """The Betti numbers over Z/modulus of the complex of the live cells, their boundaries
+    restricted to live faces with signs (-1)^i (an edge (a < b) is b - a): pairs (c, f) with f
+    in the boundary of c are eliminated, the other cofaces x of f taking
+    bd x - (<bd x, f> / <bd c, f>) bd c, until no live cell has a boundary; the cells left are
+    the homology."""
+    bd = [dict() for _ in range(4)]
+    cob = [dict() for _ in range(4)]
+    for d in (1, 2, 3):
+        for c in np.nonzero(alive[d])[0].tolist():
+            row = {f: (-1) ** (i + (d == 1)) % modulus for i, f in enumerate(faces[d][c])
+                   if alive[d - 1][f]}
+            bd[d][c] = row
+            for f in row:
+                cob[d - 1].setdefault(f, set()).add(c)
+    left = [int(a.sum()) for a in alive]
+    for d in (3, 2, 1):
+        for c in list(bd[d]):
+            row = bd[d].get(c)
+            if not row:
+                continue
+            f = min(row, key=lambda x: len(cob[d - 1][x]))
+            inv = pow(row[f], modulus - 2, modulus) if modulus > 2 else 1
+            for x in list(cob[d - 1][f]):
+                if x == c:
+                    continue
+                other = bd[d][x]
+                factor = other[f] * inv % modulus
+                for g, v in row.items():
+                    w = (other.get(g, 0) - factor * v) % modulus
+                    if w:
+                        if g not in other:
+                            cob[d - 1][g].add(x)
+                        other[g] = w
+                    elif g in other:
+                        del other[g]
+                        cob[d - 1][g].discard(x)
+            # Remove c and f: c leaves its faces' cofaces and its cofaces' boundaries, f its
+            # faces' cofaces.
+            for g in row:
+                cob[d - 1][g].discard(c)
+            del bd[d][c]
+            for y in cob[d].pop(c, ()):
+                bd[d + 1][y].pop(c, None)
+            if d - 1 > 0:
+                for g in bd[d - 1].pop(f, {}):
+                    cob[d - 2][g].discard(f)
+            cob[d - 1].pop(f, None)
+            left[d] -= 1
+            left[d - 1] -= 1
+    return left
+
+
 def topology(nv, simplices):
+    if simplices.shape[1] == 4:
+        return topology3(nv, simplices)
     parent = np.arange(nv)
 
     def find(a):
@@ -291,6 +595,39 @@ def topology(nv, simplices):
     return t
 
 
+def topology3(nv, tets):
+    """Vertices, tetrahedra, components, Euler characteristic, boundary and non-manifold
+    triangles and (closed meshes) the Betti numbers of a tetrahedral mesh."""
+    triangles, tet_tris = _faces(tets)
+    edges, _ = _faces(triangles)
+    counts = np.bincount(tet_tris.ravel(), minlength=len(triangles))
+    parent = np.arange(nv)
+
+    def find(a):
+        root = a
+        while parent[root] != root:
+            root = parent[root]
+        while parent[a] != root:
+            parent[a], a = root, parent[a]
+        return root
+
+    for a, b in edges.tolist():
+        ra, rb = find(a), find(b)
+        if ra != rb:
+            parent[ra] = rb
+    used = np.zeros(nv, bool)
+    used[tets.ravel()] = True
+    t = {"vertices": int(nv), "simplices": int(len(tets)),
+         "components": len({find(v) for v in range(nv)}), "unused_vertices": int((~used).sum()),
+         "euler": int(nv - len(edges) + len(triangles) - len(tets)),
+         "boundary_triangles": int((counts == 1).sum()),
+         "nonmanifold_triangles": int((counts > 2).sum())}
+    b = betti3(nv, tets)
+    if b:
+        t.update(b)
+    return t
+
+
 # --- Distances ---------------------------------------------------------------------------------
 
 
@@ -319,18 +656,88 @@ def _tri_d2(p, a, b, c):
 
 
 def mesh_points(points, simplices):
-    """The vertices and a barycentric grid on every simplex."""
-    if simplices.shape[1] == 3:
+    """The vertices and a barycentric grid on every simplex, in pieces (one per grid point of
+    the simplex: a tetrahedral mesh's grid does not fit in memory at once)."""
+    if simplices.shape[1] == 4:
+        m = 3
+        bary = [(i / m, j / m, l / m, 1 - (i + j + l) / m) for i in range(m + 1)
+                for j in range(m + 1 - i) for l in range(m + 1 - i - j) if 0 < i + j + l]
+    elif simplices.shape[1] == 3:
         m = 4
         bary = [(i / m, j / m, 1 - (i + j) / m) for i in range(m + 1) for j in range(m + 1 - i)
                 if 0 < i + j]
     else:
         m = 8
         bary = [(i / m, 1 - i / m) for i in range(1, m)]
-    out = [points]
+    yield points
     for w in bary:
-        out.append(sum(wi * points[simplices[:, i]] for i, wi in enumerate(w)))
-    return np.concatenate(out)
+        yield sum(wi * points[simplices[:, i]] for i, wi in enumerate(w))
+
+
+def _tet_d2(p, a, b, c, d):
+    """Squared distance of points p to tetrahedra (a, b, c, d) in R^n: the foot in the affine
+    hull where it lies inside, otherwise the nearest of the four faces."""
+    e = np.stack([b - a, c - a, d - a], axis=1)  # (N, 3, n)
+    w = p - a
+    gram = e @ e.transpose(0, 2, 1)
+    rhs = (e @ w[:, :, None])[:, :, 0]
+    det = np.linalg.det(gram)
+    ok = det > 1e-12 * np.maximum(np.prod(np.diagonal(gram, axis1=1, axis2=2), axis=1), 1e-300)
+    lam = np.zeros_like(rhs)
+    lam[ok] = np.linalg.solve(gram[ok], rhs[ok][:, :, None])[:, :, 0]
+    inside = ok & (lam >= 0).all(axis=1) & (lam.sum(axis=1) <= 1)
+    q = w - (lam[:, :, None] * e).sum(axis=1)
+    d2 = np.where(inside, (q * q).sum(axis=1), np.inf)
+    for f in ((a, b, c), (a, b, d), (a, c, d), (b, c, d)):
+        d2 = np.minimum(d2, _tri_d2(p, *f))
+    return d2
+
+
+def distance_to_tets(samples, points, tets, nearest=4, chunk=5000):
+    """Distance of each sample to the tetrahedra around its `nearest` nearest mesh vertices
+    (an upper bound of the distance to the mesh; exact unless the nearest tetrahedron has none
+    of those vertices)."""
+    from scipy.spatial import cKDTree
+    owner = np.repeat(np.arange(len(tets)), 4)
+    verts = tets.ravel()
+    order = np.argsort(verts, kind="stable")
+    vs, owner = verts[order], owner[order]
+    ptr = np.searchsorted(vs, np.arange(len(points) + 1))
+    tree = cKDTree(points)
+    out = np.empty(len(samples))
+    for start in range(0, len(samples), chunk):
+        s = samples[start:start + chunk]
+        _, vi = tree.query(s, k=nearest)
+        si = np.repeat(np.arange(len(s)), nearest)
+        vi = vi.ravel()
+        counts = ptr[vi + 1] - ptr[vi]
+        srep = np.repeat(si, counts)
+        offs = np.repeat(ptr[vi] - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
+        key = np.unique(srep * len(tets) + owner[offs])
+        srep, sim = key // len(tets), key % len(tets)
+        t = tets[sim]
+        dd = _tet_d2(s[srep], points[t[:, 0]], points[t[:, 1]], points[t[:, 2]],
+                     points[t[:, 3]])
+        best = np.full(len(s), np.inf)
+        np.minimum.at(best, srep, dd)
+        out[start:start + chunk] = np.sqrt(best)
+    return out
+
+
+def max_distance_to_tets(samples, points, tets, chunk=2000):
+    """The largest distance of the samples to the tetrahedra: first over the tetrahedra around
+    each sample's 4 nearest vertices, then, from the farthest samples down, over those around
+    its 32 nearest, until no sample left can exceed the refined maximum (each first value is an
+    upper bound of the second)."""
+    rough = distance_to_tets(samples, points, tets, nearest=4)
+    order = np.argsort(-rough)
+    best = 0.0
+    for start in range(0, len(order), chunk):
+        if best >= rough[order[start]]:
+            break
+        part = order[start:start + chunk]
+        best = max(best, float(distance_to_tets(samples[part], points, tets, nearest=32).max()))
+    return best
 
 
 def distance_to_mesh(samples, points, simplices, chunk=96):
@@ -389,24 +796,32 @@ def distance_to_mesh(samples, points, simplices, chunk=96):
     return out
 
 
+# The sample spacing on M of the 3-manifolds (their samples grow as spacing^-3).
+SPACING3 = {"o3-r9": 0.2}
+
+
 def measure(problem, path, spacing=0.02):
     n, k, exact = PROBLEMS[problem]
-    points, simplices = read_mesh(path, n)
+    points, simplices = read_mesh(path, n, k)
     result = {"problem": problem, "mesh": path}
     result.update(topology(len(points), simplices))
     if len(simplices) == 0:
         result["error"] = math.inf
         return result
-    on_mesh = mesh_points(points, simplices)
     if exact is None:
-        result["residual"] = float(_genus2_residual(on_mesh).max())
+        result["residual"] = max(float(_genus2_residual(x).max())
+                                 for x in mesh_points(points, simplices))
         result["error"] = result["residual"]
         result["error_kind"] = "max |F|/|grad F|"
         return result
     dist, samples = exact
-    to_m = float(dist(on_mesh).max())
-    sample = samples(spacing)
-    to_mesh = float(distance_to_mesh(sample, points, simplices).max())
+    to_m = max(float(dist(x).max()) for x in mesh_points(points, simplices))
+    if k == 3:
+        sample = samples(max(spacing, SPACING3.get(problem, 0.08)))
+        to_mesh = max_distance_to_tets(sample, points, simplices)
+    else:
+        sample = samples(spacing)
+        to_mesh = float(distance_to_mesh(sample, points, simplices).max())
     result.update({"mesh_to_M": to_m, "M_to_mesh": to_mesh, "samples": len(sample),
                    "error": max(to_m, to_mesh), "error_kind": "Hausdorff"})
     return result

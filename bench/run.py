@@ -7,14 +7,17 @@ Usage: bench/run.sh [--quick] [--out FILE] [--bindir DIR] [--repeats R] [--workd
 1. Exploration: runs ndcontour at a few depths and each peer at a few resolutions once, and
    measures every mesh with bench/measure.py (two-sided Hausdorff distance to the true manifold
    where it is known in closed form, max |F|/|grad F| otherwise; components, Euler
-   characteristic).
+   characteristic; for the 3-manifolds also the Betti numbers).
 2. Matching: pairs every ndcontour depth with the peer run of the nearest error (log scale,
    within a factor 4).
 3. Timing: runs each pair's two commands R times, interleaved (A B A B ..), as whole processes
    (wall time, output written), and reports medians and spreads (min-max).
-4. Writes the tables, with the machine, load, date and commit, between the markers
-   <!-- peer-bench:begin --> and <!-- peer-bench:end --> of FILE (docs/performance.md by
-   default; the section is appended when the markers are missing).
+4. Writes the tables, with the machine, load, date and commit: curves and surfaces between the
+   markers <!-- peer-bench:begin --> and <!-- peer-bench:end --> of FILE (docs/performance.md
+   by default), the 3-manifolds (k = 3, with vertex counts and Betti numbers beside the error)
+   between <!-- peer-bench-k3:begin --> and <!-- peer-bench-k3:end -->; a section is
+   rewritten only when the run had problems of its kind (--only), and appended when its
+   markers are missing.
 
 --quick: the smallest settings of two problems, 1 repeat (the ctest "peer-bench-quick").
 No time is asserted anywhere.
@@ -38,6 +41,11 @@ import measure  # noqa: E402
 from tables import find_bindir, nearest, sh, spread, timed, write_section  # noqa: E402
 
 BEGIN, END = "<!-- peer-bench:begin -->", "<!-- peer-bench:end -->"
+BEGIN3, END3 = "<!-- peer-bench-k3:begin -->", "<!-- peer-bench-k3:end -->"
+
+# GUDHI's scales for the 3-manifolds: its meshes have about scale^-3 vertices (sphere3-r5:
+# 36,316 at 0.3, 123,778 at 0.2), its error about scale^2 (8.8e-2 at 0.3).
+K3_SCALES = [0.3, 0.22, 0.16]
 
 # problem: (problem file, ndcontour depths, {peer: [settings]}); CGAL settings are
 # (angle bound in degrees, radius bound, distance bound), GUDHI settings the triangulation scale.
@@ -58,6 +66,13 @@ FULL = {
                {"cgal": [(30, 0.05, 0.005), (30, 0.03, 0.003), (30, 0.02, 0.002),
                          (30, 0.015, 0.0015), (30, 0.012, 0.0012)],
                 "gudhi": [0.025, 0.017, 0.012]}),
+    # 3-manifolds (k = 3): GUDHI's 3-cells split into tetrahedra (bench/gudhi_trace.cpp).
+    # O(3) (o3-r9) is left out: GUDHI traced nothing at scale 0.5 and did not finish within
+    # 300 s at 0.4 and 0.3.
+    "sphere3-r5": ("experiments/problems/sphere3-r5.toml", [3, 4], {"gudhi": K3_SCALES}),
+    "sphere3-r6": ("experiments/problems/sphere3-r6.toml", [3, 4], {"gudhi": K3_SCALES}),
+    "s1xs2-r5": ("experiments/problems/s1xs2-r5.toml", [3, 4], {"gudhi": K3_SCALES}),
+    "flat-3torus-r6": ("experiments/problems/flat-3torus-r6.toml", [3], {"gudhi": K3_SCALES}),
 }
 QUICK = {
     "torus": ("experiments/problems/torus.toml", [3], {"cgal": [(30, 0.2, 0.02)],
@@ -113,8 +128,20 @@ def settings_text(run):
     return f"scale {s:g}"
 
 
+def betti_text(run):
+    """β b0 b1 .. over Q, with Z/2's beside where they differ; – when not computed."""
+    if "betti" not in run:
+        return "β –"
+    t = "β " + " ".join(map(str, run["betti"]))
+    if run["betti_z2"] != run["betti"]:
+        t += " (Z/2 " + " ".join(map(str, run["betti_z2"])) + ")"
+    return t
+
+
 def topology_text(run):
     t = f"{run['components']} comp, χ {run['euler']}"
+    if "boundary_triangles" in run:  # a 3-manifold
+        t += ", " + betti_text(run)
     extra = []
     if run.get("boundary_edges"):
         extra.append(f"{run['boundary_edges']} bdry e")
@@ -122,6 +149,10 @@ def topology_text(run):
         extra.append(f"{run['nonmanifold_edges']} non-mfd e")
     if run.get("bad_vertices"):
         extra.append(f"{run['bad_vertices']} deg≠2 v")
+    if run.get("boundary_triangles"):
+        extra.append(f"{run['boundary_triangles']} bdry tri")
+    if run.get("nonmanifold_triangles"):
+        extra.append(f"{run['nonmanifold_triangles']} non-mfd tri")
     return t + (" (" + ", ".join(extra) + ")" if extra else "")
 
 
@@ -198,35 +229,70 @@ def main(argv):
     versions = sh("dpkg-query -W -f='${Package} ${Version}, ' libcgal-dev libgudhi-dev "
                   "2>/dev/null").rstrip(", ")
     cmdline = "bench/run.sh" + ("".join(f" {a}" for a in argv) if argv else "")
-    lines = [BEGIN, "",
-             f"Measured {started:%Y-%m-%d %H:%M} UTC by `{cmdline}` on {os.cpu_count()} cores "
-             f"(`nproc` {sh('nproc')}; {cpu}), commit {commit}, {versions}; load average "
-             f"{' '.join(load_start)} at the start and {' '.join(load_end)} at the end; "
-             f"{repeats} interleaved run(s) per command.", "",
-             "| problem | n | peer | ndcontour | error | topology | median s | spread s | peer "
-             "settings | peer error | peer topology | peer median s | peer spread s | "
-             "ndcontour/peer |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    for problem, n, peer, a, b, ta, tb in rows:
-        ma, sa = fmt_time(ta)
-        mb, sb = fmt_time(tb)
-        lines.append(f"| {problem} | {n} | {peer} | {settings_text(a)} | {a['error']:.2e} | "
-                     f"{topology_text(a)} | {ma:.3g} | {sa} | {settings_text(b)} | "
-                     f"{b['error']:.2e} | {topology_text(b)} | {mb:.3g} | {sb} | {ma / mb:.2f} |")
-    lines += ["", "All runs of the exploration (one run each; the error is the two-sided "
-              "Hausdorff distance, for genus2 the max |F|/|grad F| on the mesh):", "",
-              "| problem | tool | settings | vertices | simplices | mesh→M | M→mesh | error | "
-              "topology | s |", "|---|---|---|---|---|---|---|---|---|---|"]
-    for r in explored:
-        m1 = f"{r['mesh_to_M']:.2e}" if "mesh_to_M" in r else "–"
-        m2 = f"{r['M_to_mesh']:.2e}" if "M_to_mesh" in r else "–"
-        lines.append(f"| {r['problem']} | {r['tool']} | {settings_text(r)} | {r['vertices']} | "
-                     f"{r['simplices']} | {m1} | {m2} | {r['error']:.2e} | {topology_text(r)} | "
-                     f"{r['time']:.3g} |")
-    lines += ["", END]
-    section = "\n".join(lines)
+    provenance = (f"Measured {started:%Y-%m-%d %H:%M} UTC by `{cmdline}` on {os.cpu_count()} "
+                  f"cores (`nproc` {sh('nproc')}; {cpu}), commit {commit}, {versions}; load "
+                  f"average {' '.join(load_start)} at the start and {' '.join(load_end)} at the "
+                  f"end; {repeats} interleaved run(s) per command.")
 
-    write_section(args.out, BEGIN, END, "Peer benchmark", section)
+    def exploration(runs, what):
+        out = ["", f"All runs of the exploration (one run each; the error is {what}):", "",
+               "| problem | tool | settings | vertices | simplices | mesh→M | M→mesh | error | "
+               "topology | s |", "|---|---|---|---|---|---|---|---|---|---|"]
+        for r in runs:
+            m1 = f"{r['mesh_to_M']:.2e}" if "mesh_to_M" in r else "–"
+            m2 = f"{r['M_to_mesh']:.2e}" if "M_to_mesh" in r else "–"
+            out.append(f"| {r['problem']} | {r['tool']} | {settings_text(r)} | {r['vertices']} | "
+                       f"{r['simplices']} | {m1} | {m2} | {r['error']:.2e} | "
+                       f"{topology_text(r)} | {r['time']:.3g} |")
+        return out
+
+    # Curves and surfaces (k = 1, 2): the section between BEGIN and END, rewritten only when the
+    # run had such problems (so that --only with 3-manifolds keeps it).
+    def is3(problem):
+        return measure.PROBLEMS[problem][1] == 3
+
+    if any(not is3(p) for p in problems):
+        lines = [BEGIN, "", provenance, "",
+                 "| problem | n | peer | ndcontour | error | topology | median s | spread s | "
+                 "peer settings | peer error | peer topology | peer median s | peer spread s | "
+                 "ndcontour/peer |",
+                 "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        for problem, n, peer, a, b, ta, tb in rows:
+            if is3(problem):
+                continue
+            ma, sa = fmt_time(ta)
+            mb, sb = fmt_time(tb)
+            lines.append(f"| {problem} | {n} | {peer} | {settings_text(a)} | {a['error']:.2e} | "
+                         f"{topology_text(a)} | {ma:.3g} | {sa} | {settings_text(b)} | "
+                         f"{b['error']:.2e} | {topology_text(b)} | {mb:.3g} | {sb} | "
+                         f"{ma / mb:.2f} |")
+        lines += exploration([r for r in explored if not is3(r["problem"])],
+                             "the two-sided Hausdorff distance, for genus2 the max |F|/|grad F| "
+                             "on the mesh")
+        lines += ["", END]
+        write_section(args.out, BEGIN, END, "Peer benchmark", "\n".join(lines))
+    # 3-manifolds (k = 3): their own section, with vertex counts and Betti numbers.
+    if any(is3(p) for p in problems):
+        lines = [BEGIN3, "", provenance, "",
+                 "| problem | n | ndcontour | vertices | error | topology | median s | "
+                 "spread s | GUDHI settings | vertices | error | topology | median s | "
+                 "spread s | ndcontour/GUDHI |",
+                 "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        for problem, n, peer, a, b, ta, tb in rows:
+            if not is3(problem):
+                continue
+            ma, sa = fmt_time(ta)
+            mb, sb = fmt_time(tb)
+            lines.append(f"| {problem} | {n} | {settings_text(a)} | {a['vertices']} | "
+                         f"{a['error']:.2e} | {topology_text(a)} | {ma:.3g} | {sa} | "
+                         f"{settings_text(b)} | {b['vertices']} | {b['error']:.2e} | "
+                         f"{topology_text(b)} | {mb:.3g} | {sb} | {ma / mb:.2f} |")
+        lines += exploration([r for r in explored if is3(r["problem"])],
+                             "the two-sided Hausdorff distance, M→mesh over the tetrahedra "
+                             "around the 32 vertices nearest to each sample of M, "
+                             "bench/measure.py")
+        lines += ["", END3]
+        write_section(args.out, BEGIN3, END3, "Peer benchmark, 3-manifolds", "\n".join(lines))
     if not args.workdir:
         shutil.rmtree(workdir, ignore_errors=True)
     print(f"bench/run.sh: {len(rows)} matched rows, {len(explored)} runs -> {args.out}",
