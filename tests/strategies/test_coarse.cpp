@@ -22,6 +22,7 @@
 
 #include "framework/problem/problem.hpp"
 #include "pipeline/pipeline.hpp"
+#include "tests/solve_support.hpp"
 #include "tests/test_support.hpp"
 
 namespace {
@@ -51,17 +52,7 @@ ndc::Problem kSphere(int n, int k, std::uint32_t seed) {
   return ndc::test::makeProblem(n, equations, 1.2);
 }
 
-template <class S>
-ndc::RunResult solveAt(const ndc::Problem& problem, int depth) {
-  ndc::test::PrecisionScope<S> scope(128);
-  ndc::Settings s;
-  s.depth = depth;
-  if constexpr (!std::is_same_v<S, double>) {
-    s.scalar = "mpfr";
-    s.precisionBits = 128;
-  }
-  return ndc::runPipeline(problem, s);
-}
+using ndc::test::solveAt;
 
 /// Certified with the k-sphere's topology.
 void checkSphere(const ndc::RunResult& r, int k) {

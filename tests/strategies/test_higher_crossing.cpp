@@ -21,6 +21,7 @@
 #include "framework/problem/problem.hpp"
 #include "pipeline/pipeline.hpp"
 #include "strategies/connection/crossing/kuhn.hpp"
+#include "tests/solve_support.hpp"
 #include "tests/test_support.hpp"
 
 namespace {
@@ -176,17 +177,7 @@ ndc::Problem problemOf(int n, const std::vector<std::string>& equations, double 
   return ndc::parseProblem(text.str(), "k3.toml");
 }
 
-template <class S>
-ndc::RunResult solveAt(const ndc::Problem& problem, int depth) {
-  ndc::test::PrecisionScope<S> scope(128);
-  ndc::Settings s;
-  s.depth = depth;
-  if constexpr (!std::is_same_v<S, double>) {
-    s.scalar = "mpfr";
-    s.precisionBits = 128;
-  }
-  return ndc::runPipeline(problem, s);
-}
+using ndc::test::solveAt;
 
 /// The mesh's simplices as vertex lists.
 std::vector<std::vector<int>> simplicesOf(const ndc::RunResult& r) {
