@@ -17,6 +17,7 @@
 #include "framework/problem/cell_forms.hpp"
 #include "framework/problem/problem.hpp"
 #include "framework/util/errors.hpp"
+#include "framework/util/flat_map.hpp"
 #include "strategies/connection/crossing/certificate.hpp"
 #include "strategies/connection/crossing/domain_boundary.hpp"
 #include "strategies/connection/crossing/enclosure.hpp"
@@ -89,9 +90,11 @@ class HigherCrossing {
         position_(in, grid_),
         subsets_(axisSubsets(n_, k_)),
         chains_(kuhnChains(k_)) {
-    if (n_ * bits_ > kCellKeyBits) {
+    // A face's key: its corner, bits_ per axis, then its subset in kSubsetBits.
+    if (n_ * bits_ + kSubsetBits > kCellKeyBits || subsets_.size() >= (1u << kSubsetBits)) {
       throw InputError("k = " + std::to_string(k_) + " in R^" + std::to_string(n_) +
-                       " supports --depth up to " + std::to_string(kCellKeyBits / n_ - 2));
+                       " supports --depth up to " +
+                       std::to_string((kCellKeyBits - kSubsetBits) / n_ - 2));
     }
     // Bernstein slices decide the faces evaluation leaves open (polynomial input only).
     double coefficients = 0;
@@ -162,21 +165,23 @@ class HigherCrossing {
   /// The faces of cells [from, cellCount()): every m-face of each, once.
   void enumerateFaces(std::size_t from) {
     std::vector<std::int32_t> corner(static_cast<std::size_t>(n_));
+    ownedFrom_.resize(from);
+    cellFaces_.resize(from * facesPerCell());
     for (std::size_t c = from; c < cellCount(); ++c) {
+      ownedFrom_.push_back(std::int32_t(faceAxes_.size()));
       const auto index = cellIndex(c);
       for (std::size_t a = 0; a < subsets_.size(); ++a) {
         const std::vector<int>& axes = subsets_[a];
         for (int side = 0; side < (1 << k_); ++side) {
           std::copy(index.begin(), index.end(), corner.begin());
-          std::uint64_t mask = 0;
-          for (int t = 0; t < k_; ++t) {
-            corner[std::size_t(axes[t])] += (side >> t) & 1;
-            mask |= std::uint64_t{1} << axes[t];
-          }
-          const FaceKey key{packWide(corner), mask};
-          if (faceOf_.try_emplace(key, std::int32_t(faceAxes_.size())).second) {
+          for (int t = 0; t < k_; ++t) corner[std::size_t(axes[t])] += (side >> t) & 1;
+          const CellKey key = (packWide(corner) << kSubsetBits) | CellKey(a);
+          const auto [id, fresh] = faceOf_.insert(key, std::int32_t(faceAxes_.size()));
+          cellFaces_.push_back(*id);
+          if (fresh) {
             faceCorner_.insert(faceCorner_.end(), corner.begin(), corner.end());
             faceAxes_.push_back(std::int32_t(a));
+            faceSide_.push_back(std::uint8_t(side));
           }
         }
       }
@@ -190,18 +195,22 @@ class HigherCrossing {
   /// Solves every face at the current level; adds the cells around crossed faces and solves
   /// their faces too. Returns the crossings within rounding of a face boundary.
   std::int64_t solveFaces() {
-    faceOf_.clear(), faceCorner_.clear(), faceAxes_.clear(), solution_.clear();
+    faceOf_.clear(), faceCorner_.clear(), faceAxes_.clear(), faceSide_.clear();
+    cellFaces_.clear();
+    solution_.clear();
     cellIndex_.resize(in_.cells.size() * std::size_t(n_));
     for (auto it = cellOf_.begin(); it != cellOf_.end();)
       it = it->second >= std::int32_t(in_.cells.size()) ? cellOf_.erase(it) : std::next(it);
     std::size_t cellsDone = 0;
     while (cellsDone < cellCount()) {
-      const std::size_t facesBefore = faceAxes_.size();
+      const std::size_t facesBefore = faceAxes_.size(), cellsBefore = cellsDone;
       enumerateFaces(cellsDone);
       cellsDone = cellCount();
+      ownedFrom_.push_back(std::int32_t(faceAxes_.size()));
       solution_.resize(faceAxes_.size());
-      parallelFor(faceAxes_.size() - facesBefore,
-                  [&](std::size_t i) { solveFace(facesBefore + i); });
+      // Each cell's new faces, on its affine model first.
+      parallelFor(cellsDone - cellsBefore, [&](std::size_t i) { solveOwned(cellsBefore + i); });
+      ownedFrom_.pop_back();
       touchCells(facesBefore);
     }
     facesSolved_ += std::int64_t(faceAxes_.size());
@@ -315,6 +324,51 @@ class HigherCrossing {
     solution_[f] = std::move(r);
   }
 
+  /// Per-thread storage of solveOwned.
+  struct ModelWork {
+    LeafModel<S> model;
+    Box<S> box;
+    std::vector<FacePreconditioner<S>> pre;  ///< per subset of fixed axes
+    std::vector<std::uint8_t> built;
+  };
+
+  /// The faces cell c added (ownedFrom_[c] .. ownedFrom_[c + 1]): those the cell's affine model
+  /// proves M_c misses (faceExcluded, then the face's Krawczyk test) have no crossing; the
+  /// others are solved (docs/crossing.md, "Faces by evaluation": the same model as for k = 2).
+  void solveOwned(std::size_t c) {
+    const auto first = std::size_t(ownedFrom_[c]), last = std::size_t(ownedFrom_[c + 1]);
+    if (first == last) return;
+    std::optional<ModelWork> fresh;
+    ModelWork& w = threadScratch<S, ModelWork>(fresh);
+    cellBoxInto(grid_, domain_, cellIndex(c), w.box);
+    buildLeafModel(threadEvaluators(in_.system), w.box, std::span<const S>(level_), w.model);
+    w.pre.resize(subsets_.size());
+    w.built.assign(subsets_.size(), 0);
+    for (std::size_t f = first; f < last; ++f) {
+      const auto a = std::size_t(faceAxes_[f]);
+      const std::span<const int> axes(subsets_[a]);
+      if (w.model.valid) {
+        if (faceExcluded(w.model, w.box, axes, faceSide_[f])) {
+          solution_[f] = excludedFace();
+          continue;
+        }
+        if (!w.built[a]) buildFacePreconditioner(w.model, axes, w.pre[a]), w.built[a] = 1;
+        if (w.pre[a].valid && faceKrawczykExcludes(w.model, w.pre[a], w.box, axes, faceSide_[f])) {
+          solution_[f] = excludedFace();
+          continue;
+        }
+      }
+      solveFace(f);
+    }
+  }
+
+  /// A face proven to hold no crossing.
+  static FaceSolution<S> excludedFace() {
+    FaceSolution<S> r;
+    r.proven = true;
+    return r;
+  }
+
   /// The Bernstein coefficients of all m equations' slices of a face fixing `axes`.
   double sliceCoefficients(const std::vector<int>& axes) const {
     double total = 0;
@@ -403,18 +457,10 @@ class HigherCrossing {
     const auto index = cellIndex(c);
     // Its crossed faces, as (subset, side) with every crossing proven.
     std::vector<std::pair<std::int32_t, int>> crossed;
-    std::vector<std::int32_t> corner(static_cast<std::size_t>(n_));
+    const std::int32_t* faces = cellFaces_.data() + c * facesPerCell();
     for (std::size_t a = 0; a < subsets_.size(); ++a) {
       for (int side = 0; side < (1 << k_); ++side) {
-        std::copy(index.begin(), index.end(), corner.begin());
-        std::uint64_t mask = 0;
-        for (int t = 0; t < k_; ++t) {
-          corner[std::size_t(subsets_[a][t])] += (side >> t) & 1;
-          mask |= std::uint64_t{1} << subsets_[a][t];
-        }
-        const auto it = faceOf_.find(FaceKey{packWide(corner), mask});
-        if (it == faceOf_.end()) return CellFailure::kCrossing;
-        const FaceSolution<S>& s = solution_[std::size_t(it->second)];
+        const FaceSolution<S>& s = solution_[std::size_t(*faces++)];
         if (!s.proven || s.roots > 1 || s.degenerate) return CellFailure::kCrossing;
         if (s.roots == 1) crossed.emplace_back(std::int32_t(a), side);
       }
@@ -782,6 +828,11 @@ class HigherCrossing {
     }
   }
 
+  /// The bits of a face key that hold its subset of fixed axes.
+  static constexpr int kSubsetBits = 16;
+  /// The minimal m-faces of one cell: C(n, k) 2^k.
+  std::size_t facesPerCell() const { return subsets_.size() << k_; }
+
   /// Halvings per axis of shrink.
   static constexpr int kShrinkRounds = 4;
 
@@ -801,9 +852,13 @@ class HigherCrossing {
   std::vector<S> level_;
   std::vector<std::int32_t> cellIndex_;  ///< n per cell: solution cells, then touch cells
   CellMap<std::int32_t> cellOf_;
-  std::unordered_map<FaceKey, std::int32_t, FaceKeyHash> faceOf_;
+  FlatMap<CellKey, std::int32_t> faceOf_;  ///< by corner and subset
+  /// Per cell, its faces in the order (subset, side): facesPerCell() of them.
+  std::vector<std::int32_t> cellFaces_;
   std::vector<std::int32_t> faceCorner_;  ///< n per face
   std::vector<std::int32_t> faceAxes_;    ///< its subset
+  std::vector<std::uint8_t> faceSide_;    ///< its side in the cell that added it (bit t: axes[t])
+  std::vector<std::int32_t> ownedFrom_;   ///< per cell: the first face it added
   std::vector<FaceSolution<S>> solution_;
   std::vector<CellFailure> failure_;
   std::int64_t facesSolved_ = 0;
