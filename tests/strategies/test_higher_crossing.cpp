@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <random>
 #include <sstream>
@@ -18,6 +19,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "applications/load.hpp"
 #include "framework/problem/problem.hpp"
 #include "pipeline/pipeline.hpp"
 #include "strategies/connection/crossing/kuhn.hpp"
@@ -332,6 +334,45 @@ TEST_CASE("higher k: no false certificate on seeded random offsets and radii", "
 
 TEST_CASE("higher k: no false certificate on seeded random rotations", "[higher-k][slow]") {
   falsify(4, true, 4, 71202621);
+}
+
+}  // namespace
+
+namespace {
+
+/// The example problems for k >= 3 (experiments/problems/) at two depths: the mesh has the
+/// Betti numbers over Q and Z/2 and the components their [expect] states, is closed, and is
+/// consistently oriented; those that the certificate reaches (docs/certificate.md, "Any k")
+/// are certified.
+TEST_CASE("higher k: the example 3- and 4-manifolds at two depths", "[higher-k][slow]") {
+  struct Case {
+    const char* name;
+    std::vector<int> depths;
+    bool certified;  ///< at the deeper depth
+  };
+  const std::vector<Case> cases{{"sphere3-r4", {3, 4}, false},
+                                {"sphere3-r5", {3, 4}, false},
+                                {"s1xs2-r5", {3, 4}, true},
+                                {"flat-3torus-r6", {2, 3}, true},
+                                {"sphere4-r6", {2, 3}, false}};
+  for (const Case& c : cases) {
+    const ndc::Problem p =
+        ndc::loadProblem(std::filesystem::path(ndc::test::sourceDir()) / "experiments" /
+                         "problems" / (std::string(c.name) + ".toml"));
+    for (int depth : c.depths) {
+      const auto r = solveAt<double>(p, depth);
+      INFO(c.name << ": " << describe(r));
+      const auto& m = r.summary.mesh;
+      std::vector<std::int64_t> betti(p.expect.lists.at("betti").begin(),
+                                      p.expect.lists.at("betti").end());
+      std::vector<std::int64_t> z2(p.expect.lists.at("betti_z2").begin(),
+                                   p.expect.lists.at("betti_z2").end());
+      checkMesh(r, betti, false);
+      CHECK(m.bettiZ2 == z2);
+      CHECK(m.components == *p.expect.components);
+      if (depth == c.depths.back()) CHECK(r.summary.topology.certified == c.certified);
+    }
+  }
 }
 
 }  // namespace
