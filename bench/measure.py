@@ -555,9 +555,8 @@ def _reduce(faces, alive, modulus):
     return left
 
 
-def topology(nv, simplices):
-    if simplices.shape[1] == 4:
-        return topology3(nv, simplices)
+def _components(nv, pairs):
+    """The connected components of nv vertices joined by the (a, b) pairs (union-find)."""
     parent = np.arange(nv)
 
     def find(a):
@@ -568,6 +567,17 @@ def topology(nv, simplices):
             parent[a], a = root, parent[a]
         return root
 
+    for a, b in pairs:
+        ra, rb = find(a), find(b)
+        if ra != rb:
+            parent[ra] = rb
+    return len({find(v) for v in range(nv)})
+
+
+def topology(nv, simplices):
+    if simplices.shape[1] == 4:
+        return topology3(nv, simplices)
+
     if simplices.shape[1] == 3:
         edges = np.sort(np.concatenate([simplices[:, [0, 1]], simplices[:, [1, 2]],
                                         simplices[:, [0, 2]]]), axis=1)
@@ -575,14 +585,10 @@ def topology(nv, simplices):
     else:
         unique = np.unique(np.sort(simplices, axis=1), axis=0)
         counts = None
-    for a, b in unique.tolist():
-        ra, rb = find(a), find(b)
-        if ra != rb:
-            parent[ra] = rb
     used = np.zeros(nv, bool)
     used[simplices.ravel()] = True
-    roots = {find(v) for v in range(nv)}
-    t = {"vertices": int(nv), "simplices": int(len(simplices)), "components": len(roots),
+    t = {"vertices": int(nv), "simplices": int(len(simplices)),
+         "components": _components(nv, unique.tolist()),
          "unused_vertices": int((~used).sum())}
     if simplices.shape[1] == 3:
         t["euler"] = int(nv - len(unique) + len(simplices))
@@ -601,24 +607,11 @@ def topology3(nv, tets):
     triangles, tet_tris = _faces(tets)
     edges, _ = _faces(triangles)
     counts = np.bincount(tet_tris.ravel(), minlength=len(triangles))
-    parent = np.arange(nv)
 
-    def find(a):
-        root = a
-        while parent[root] != root:
-            root = parent[root]
-        while parent[a] != root:
-            parent[a], a = root, parent[a]
-        return root
-
-    for a, b in edges.tolist():
-        ra, rb = find(a), find(b)
-        if ra != rb:
-            parent[ra] = rb
     used = np.zeros(nv, bool)
     used[tets.ravel()] = True
     t = {"vertices": int(nv), "simplices": int(len(tets)),
-         "components": len({find(v) for v in range(nv)}), "unused_vertices": int((~used).sum()),
+         "components": _components(nv, edges.tolist()), "unused_vertices": int((~used).sum()),
          "euler": int(nv - len(edges) + len(triangles) - len(tets)),
          "boundary_triangles": int((counts == 1).sum()),
          "nonmanifold_triangles": int((counts > 2).sum())}

@@ -51,13 +51,7 @@ ndc::RunResult surface(std::vector<std::string> names, int count = 3) {
   return r;
 }
 
-/// What `write` writes for `r`.
-template <class Write>
-std::string text(const ndc::RunResult& r, Write write) {
-  std::ostringstream out;
-  write(out, r);
-  return out.str();
-}
+using ndc::test::text;
 
 /// The first line of `s`.
 std::string firstLine(const std::string& s) { return s.substr(0, s.find('\n')); }

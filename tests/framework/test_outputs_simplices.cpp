@@ -43,13 +43,7 @@ ndc::RunResult sphere(int k) {
   return r;
 }
 
-/// The text `write` writes for `r`.
-template <class Write>
-std::string text(const ndc::RunResult& r, Write write) {
-  std::ostringstream out;
-  write(out, r);
-  return out.str();
-}
+using ndc::test::text;
 
 std::string ply(const ndc::RunResult& r, ndc::PlyFormat format) {
   return text(r, [&](std::ostream& o, const ndc::RunResult& x) { ndc::writePly(o, x, format); });

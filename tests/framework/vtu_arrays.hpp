@@ -1,6 +1,7 @@
 /// \file vtu_arrays.hpp
-/// For tests: the DataArrays of a mesh.vtu decoded to numbers, ASCII or binary (base64 of the
-/// zlib blocks of vtkZLibDataCompressor with a UInt64 header, docs/contracts.md 4.4).
+/// For tests: what a mesh writer writes, as text, and the DataArrays of a mesh.vtu decoded to
+/// numbers, ASCII or binary (base64 of the zlib blocks of vtkZLibDataCompressor with a UInt64
+/// header, docs/contracts.md 4.4).
 #pragma once
 
 #include <zlib.h>
@@ -15,6 +16,14 @@
 #include <vector>
 
 namespace ndc::test {
+
+/// What a writer `write(stream, result)` writes for `r` (mesh.ply, mesh.vtu, ..), as text.
+template <class Result, class Write>
+std::string text(const Result& r, Write write) {
+  std::ostringstream out;
+  write(out, r);
+  return out.str();
+}
 
 /// The bytes of base64 `text` (RFC 4648, padded).
 inline std::vector<unsigned char> unbase64(const std::string& text) {
