@@ -59,7 +59,8 @@ Stats degeneracyAtN(const CsvTable& t, const Group& series, const Group& cell,
   return st;
 }
 
-/// What a series shows: first to last n, whether every step goes up, and the paper's claim.
+/// What a series shows: first to last n, whether every step goes up, the runs' spread (`widest`,
+/// -1 when each n has one run), and the paper's claim.
 void degeneracySentences(const std::string& label, const std::string& k,
                          const std::vector<std::pair<int, double>>& trend, double widest,
                          std::vector<std::string>& sentences) {
@@ -75,7 +76,8 @@ void degeneracySentences(const std::string& label, const std::string& k,
   if (trend.size() > 2)
     sentence += drops.empty() ? ", increasing at every step"
                               : ", not monotonically (it drops from n = " + join(drops, ", ") + ")";
-  sentence += "; the seeds spread it by up to " + formatFixed(widest, 1) + " points.";
+  sentence += widest < 0 ? std::string(" (one run at each n).")
+                         : "; the seeds spread it by up to " + formatFixed(widest, 1) + " points.";
   sentences.push_back(sentence);
   if (trend.size() > 1)
     sentences.push_back(
@@ -104,11 +106,11 @@ void degeneracySeries(const CsvTable& t, const Group& g, std::size_t s,
   std::sort(byN.begin(), byN.end(), [](const Group& x, const Group& y) {
     return std::stoi(x.key[0]) < std::stoi(y.key[0]);
   });
-  double widest = 0;
+  double widest = -1;  // the widest spread over runs at one n; -1: one run at each n
   for (const Group& cell : byN) {
     const Stats st = degeneracyAtN(t, g, cell, vary, plot, means, points);
     trend.emplace_back(std::stoi(cell.key[0]), st.mean);
-    widest = std::max(widest, st.max - st.min);
+    widest = std::max(widest, st.count > 1 ? st.max - st.min : -1.0);
   }
   if (k == "2" && plot.sphereMean.empty())
     for (const auto& [n, mean] : trend) plot.sphereMean[n] = mean;
