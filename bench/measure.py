@@ -192,21 +192,30 @@ def _clifford(r):
     return dist, samples
 
 
-def _sphere_section(m, d):
-    """Unit sphere cut by M x + d = 0: a sphere of radius rho about c0 in the flat."""
-    m, d = np.asarray(m, float), np.asarray(d, float)
-    gram = m @ m.T
-    c0 = -m.T @ np.linalg.solve(gram, d)
-    rho = math.sqrt(1 - c0 @ c0)
+def _flat_sphere(c, radius, m, d):
+    """The sphere |x - c| = radius cut by the flat M x + d = 0: a round sphere of radius rho
+    about the foot c0 of c on the flat, in the span of `basis` (orthonormal rows, the flat's
+    directions); returns c0, rho, basis and the distance to it of each row of x."""
+    c, m, d = np.asarray(c, float), np.atleast_2d(np.asarray(m, float)), np.asarray(d, float)
+    c0 = c - m.T @ np.linalg.solve(m @ m.T, m @ c + d)
+    rho = math.sqrt(radius * radius - (c - c0) @ (c - c0))
     _, _, vt = np.linalg.svd(m)
-    basis = vt[m.shape[0]:]  # orthonormal basis of the flat's directions
-    k = basis.shape[0] - 1   # dimension of the sphere
+    basis = vt[m.shape[0]:]
 
     def dist(x):
         y = x - c0
         inplane = y @ basis.T
         h2 = (y ** 2).sum(axis=1) - (inplane ** 2).sum(axis=1)
         return np.sqrt(np.maximum(h2, 0) + (np.linalg.norm(inplane, axis=1) - rho) ** 2)
+
+    return c0, rho, basis, dist
+
+
+def _sphere_section(m, d):
+    """Unit sphere cut by M x + d = 0: a sphere of radius rho about c0 in the flat."""
+    m = np.atleast_2d(np.asarray(m, float))
+    c0, rho, basis, dist = _flat_sphere(np.zeros(m.shape[1]), 1.0, m, d)
+    k = basis.shape[0] - 1  # dimension of the sphere
 
     def samples(spacing):
         if k == 1:
@@ -228,18 +237,7 @@ def _sphere_section(m, d):
 def _ball_section(c, radius, m, d, seed):
     """The sphere |x - c| = radius cut by the flat M x + d = 0 (k = 3): a round 3-sphere of
     radius rho about the foot c0 of c on the flat; samples pseudo-random (seed) on it."""
-    c, m, d = np.asarray(c, float), np.atleast_2d(np.asarray(m, float)), np.asarray(d, float)
-    gram = m @ m.T
-    c0 = c - m.T @ np.linalg.solve(gram, m @ c + d)
-    rho = math.sqrt(radius * radius - (c - c0) @ (c - c0))
-    _, _, vt = np.linalg.svd(m)
-    basis = vt[m.shape[0]:]
-
-    def dist(x):
-        y = x - c0
-        inplane = y @ basis.T
-        h2 = (y ** 2).sum(axis=1) - (inplane ** 2).sum(axis=1)
-        return np.sqrt(np.maximum(h2, 0) + (np.linalg.norm(inplane, axis=1) - rho) ** 2)
+    c0, rho, basis, dist = _flat_sphere(c, radius, m, d)
 
     def samples(spacing):
         count = int(math.ceil(2 * math.pi ** 2 * rho ** 3 / spacing ** 3))
