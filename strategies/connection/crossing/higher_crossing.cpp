@@ -90,6 +90,15 @@ class HigherCrossing {
         position_(in, grid_),
         subsets_(axisSubsets(n_, k_)),
         chains_(kuhnChains(k_)) {
+    for (int fixedCount = 0; fixedCount < k_; ++fixedCount) {
+      for (std::vector<int>& fixed : axisSubsets(n_, fixedCount)) {
+        FixedChoice choice{std::move(fixed), {}};
+        for (int j = 0; j < n_; ++j)
+          if (std::find(choice.fixed.begin(), choice.fixed.end(), j) == choice.fixed.end())
+            choice.freeAxes.push_back(j);
+        fewerFixed_.push_back(std::move(choice));
+      }
+    }
     // A face's key: its corner, bits_ per axis, then its subset in kSubsetBits.
     if (n_ * bits_ + kSubsetBits > kCellKeyBits || subsets_.size() >= (1u << kSubsetBits)) {
       throw InputError("k = " + std::to_string(k_) + " in R^" + std::to_string(n_) +
@@ -401,6 +410,7 @@ class HigherCrossing {
   struct CellWork {
     std::vector<S> centre, radius, zero;
     std::vector<Interval<S>> jacobian, fy, intervals;
+    std::vector<Interval<S>> whole;  ///< J over the whole cell
     GraphTest<S> test{0, 0};
     Box<S> box, face;
     std::vector<std::int32_t> corner;
@@ -526,28 +536,18 @@ class HigherCrossing {
   bool graphTests(CellWork& w) {
     w.test = GraphTest<S>(n_, m_);
     if (!encloseAt(w.box, w)) return false;
-    const std::vector<Interval<S>> whole = w.jacobian;
-    std::vector<int> freeAxes;
-    for (int fixedCount = 0; fixedCount < k_; ++fixedCount) {
-      for (const std::vector<int>& fixed : axisSubsets(n_, fixedCount)) {
-        freeAxes.clear();
-        for (int j = 0; j < n_; ++j)
-          if (std::find(fixed.begin(), fixed.end(), j) == fixed.end()) freeAxes.push_back(j);
-        if (w.test.graph(whole, freeAxes)) continue;
-        if (fixedCount == 0) {
-          w.face = w.box;
-          if (!faceGraph(w, freeAxes)) return false;
-          continue;
+    w.whole = w.jacobian;
+    for (const FixedChoice& choice : fewerFixed_) {
+      const std::vector<int>& fixed = choice.fixed;
+      if (w.test.graph(w.whole, choice.freeAxes)) continue;
+      // Each face of this choice (the cell itself for none fixed) on its own enclosure.
+      for (int side = 0; side < (1 << fixed.size()); ++side) {
+        w.face = w.box;
+        for (std::size_t t = 0; t < fixed.size(); ++t) {
+          const int j = fixed[t];
+          w.face.lo[j] = w.face.hi[j] = (side >> t) & 1 ? w.box.hi[j] : w.box.lo[j];
         }
-        // Each face of this choice on its own enclosure.
-        for (int side = 0; side < (1 << fixedCount); ++side) {
-          w.face = w.box;
-          for (int t = 0; t < fixedCount; ++t) {
-            const int j = fixed[std::size_t(t)];
-            w.face.lo[j] = w.face.hi[j] = (side >> t) & 1 ? w.box.hi[j] : w.box.lo[j];
-          }
-          if (!faceGraph(w, freeAxes)) return false;
-        }
+        if (!faceGraph(w, choice.freeAxes)) return false;
       }
     }
     return true;
@@ -642,25 +642,26 @@ class HigherCrossing {
     if (crossed.empty()) return CellFailure::kNone;
     bool undecided = false;
     std::vector<std::vector<int>> simplices;
-    for (int fixedCount = k_ - 1; fixedCount >= 0; --fixedCount) {
-      for (const std::vector<int>& fixed : axisSubsets(n_, fixedCount)) {
-        for (int side = 0; side < (1 << fixedCount); ++side) {
-          simplices.clear();
-          for (const auto& [a, s] : crossed) {
-            if (!inFace(subsets_[std::size_t(a)], s, fixed, side)) continue;
-            // The facets of G holding the face: its other fixed axes with their sides.
-            std::vector<int> simplex;
-            for (int t = 0; t < k_; ++t) {
-              const int axis = subsets_[std::size_t(a)][std::size_t(t)];
-              if (std::find(fixed.begin(), fixed.end(), axis) == fixed.end())
-                simplex.push_back(2 * axis + ((s >> t) & 1));
-            }
-            simplices.push_back(std::move(simplex));
+    // fewerFixed_ holds the choices by fixed count up: the last ones fix the most axes.
+    for (auto it = fewerFixed_.rbegin(); it != fewerFixed_.rend(); ++it) {
+      const std::vector<int>& fixed = it->fixed;
+      const int fixedCount = static_cast<int>(fixed.size());
+      for (int side = 0; side < (1 << fixedCount); ++side) {
+        simplices.clear();
+        for (const auto& [a, s] : crossed) {
+          if (!inFace(subsets_[std::size_t(a)], s, fixed, side)) continue;
+          // The facets of G holding the face: its other fixed axes with their sides.
+          std::vector<int> simplex;
+          for (int t = 0; t < k_; ++t) {
+            const int axis = subsets_[std::size_t(a)][std::size_t(t)];
+            if (std::find(fixed.begin(), fixed.end(), axis) == fixed.end())
+              simplex.push_back(2 * axis + ((s >> t) & 1));
           }
-          const SphereCheck check = sphereTest(k_ - 1 - fixedCount, simplices);
-          if (check == SphereCheck::kNotSphere) return CellFailure::kLink;
-          undecided = undecided || check == SphereCheck::kUndecided;
+          simplices.push_back(std::move(simplex));
         }
+        const SphereCheck check = sphereTest(k_ - 1 - fixedCount, simplices);
+        if (check == SphereCheck::kNotSphere) return CellFailure::kLink;
+        undecided = undecided || check == SphereCheck::kUndecided;
       }
     }
     return undecided ? CellFailure::kUndecided : CellFailure::kNone;
@@ -846,6 +847,12 @@ class HigherCrossing {
   GeneralPosition<S> position_;
   std::vector<std::vector<int>> subsets_;  ///< the k-subsets of axes a face may fix
   std::vector<KuhnChain> chains_;
+  /// A choice of fewer than k fixed axes (a face of dimension above m) and its free axes.
+  struct FixedChoice {
+    std::vector<int> fixed, freeAxes;
+  };
+  /// Every such choice, by the number of fixed axes up (none first: the cell itself).
+  std::vector<FixedChoice> fewerFixed_;
   std::optional<CellForms<S>> forms_;
   const std::vector<Bernstein<S>>* rootForms_ = nullptr;
   std::vector<S> margins_;
